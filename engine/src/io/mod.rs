@@ -1,0 +1,161 @@
+//! Reading and writing meshes: OBJ and PLY (ascii, binary little and big endian).
+//!
+//! Readers treat every file as untrusted: nothing is allocated from a header count before the data
+//! that backs it has been seen, every index is range-checked, every coordinate must be finite, and
+//! errors name the file and the line, byte or element at fault.
+
+mod obj;
+mod ply;
+mod triangulate;
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use crate::error::MeshError;
+use crate::mesh::Mesh;
+
+pub use obj::{read_obj, write_obj};
+pub use ply::{read_ply, write_ply};
+
+/// Mesh file formats meshlod reads and writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MeshFormat {
+    /// Wavefront OBJ (text).
+    Obj,
+    /// Stanford PLY (ascii or binary; written as binary little endian).
+    Ply,
+}
+
+impl MeshFormat {
+    /// Format implied by a file name's extension, if any.
+    pub fn from_extension(path: &Path) -> Option<MeshFormat> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "obj" => Some(MeshFormat::Obj),
+            "ply" => Some(MeshFormat::Ply),
+            _ => None,
+        }
+    }
+
+    /// Format recognised from the first bytes of a file: PLY has a magic line, OBJ is text.
+    pub fn sniff(bytes: &[u8]) -> Option<MeshFormat> {
+        if bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n") {
+            return Some(MeshFormat::Ply);
+        }
+        let head = &bytes[..bytes.len().min(4096)];
+        let is_text = head.iter().all(|&b| {
+            b == b'\n' || b == b'\r' || b == b'\t' || (0x20..0x7f).contains(&b) || b >= 0x80
+        });
+        let has_obj_statement = head.split(|&b| b == b'\n').any(|line| {
+            let line = line.trim_ascii_start();
+            line.starts_with(b"v ") || line.starts_with(b"f ") || line.starts_with(b"#")
+        });
+        (is_text && has_obj_statement).then_some(MeshFormat::Obj)
+    }
+}
+
+/// Limits that protect a reader from files that claim (or contain) absurd amounts of data.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ReadLimits {
+    /// Largest number of vertices accepted.
+    pub max_vertices: u64,
+    /// Largest number of triangles accepted (after triangulating polygons).
+    pub max_faces: u64,
+}
+
+impl Default for ReadLimits {
+    /// 50 million vertices and 100 million triangles: about 2.4 GB of mesh in memory.
+    fn default() -> Self {
+        ReadLimits {
+            max_vertices: 50_000_000,
+            max_faces: 100_000_000,
+        }
+    }
+}
+
+impl ReadLimits {
+    pub(crate) fn check_vertices(&self, count: u64) -> Result<(), MeshError> {
+        if count > self.max_vertices {
+            return Err(MeshError::TooLarge {
+                what: "vertices",
+                count,
+                limit: self.max_vertices,
+            });
+        }
+        Ok(())
+    }
+
+    pub(crate) fn check_faces(&self, count: u64) -> Result<(), MeshError> {
+        if count > self.max_faces {
+            return Err(MeshError::TooLarge {
+                what: "faces",
+                count,
+                limit: self.max_faces,
+            });
+        }
+        Ok(())
+    }
+}
+
+fn io_error(path: &Path, err: std::io::Error) -> MeshError {
+    MeshError::Io {
+        path: path.to_path_buf(),
+        message: err.to_string(),
+    }
+}
+
+/// Reads a mesh from bytes in a known or sniffed format. `name` is used in error messages.
+pub fn read_mesh_bytes(
+    bytes: &[u8],
+    format: Option<MeshFormat>,
+    name: &Path,
+    limits: &ReadLimits,
+) -> Result<Mesh, MeshError> {
+    let format = format.or_else(|| MeshFormat::sniff(bytes)).ok_or_else(|| {
+        MeshError::UnsupportedFormat {
+            path: name.to_path_buf(),
+            reason: "neither the extension nor the content says OBJ or PLY".into(),
+        }
+    })?;
+    match format {
+        MeshFormat::Obj => read_obj(bytes, name, limits),
+        MeshFormat::Ply => read_ply(bytes, name, limits),
+    }
+}
+
+/// Reads a mesh file, choosing the format by extension and falling back to the content.
+pub fn read_mesh(path: impl AsRef<Path>) -> Result<Mesh, MeshError> {
+    read_mesh_with_limits(path, &ReadLimits::default())
+}
+
+/// [`read_mesh`] with explicit limits.
+pub fn read_mesh_with_limits(
+    path: impl AsRef<Path>,
+    limits: &ReadLimits,
+) -> Result<Mesh, MeshError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
+    let format = MeshFormat::from_extension(path).or_else(|| MeshFormat::sniff(&bytes));
+    read_mesh_bytes(&bytes, format, path, limits)
+}
+
+/// Writes a mesh in the given format to any writer.
+pub fn write_mesh_to(mut out: impl Write, mesh: &Mesh, format: MeshFormat) -> std::io::Result<()> {
+    match format {
+        MeshFormat::Obj => write_obj(&mut out, mesh),
+        MeshFormat::Ply => write_ply(&mut out, mesh),
+    }
+}
+
+/// Writes a mesh to a file whose extension (`.obj` or `.ply`) picks the format.
+pub fn write_mesh(path: impl AsRef<Path>, mesh: &Mesh) -> Result<(), MeshError> {
+    let path = path.as_ref();
+    let format = MeshFormat::from_extension(path).ok_or_else(|| MeshError::UnsupportedFormat {
+        path: PathBuf::from(path),
+        reason: "output extension must be .obj or .ply".into(),
+    })?;
+    let file = std::fs::File::create(path).map_err(|e| io_error(path, e))?;
+    let mut writer = std::io::BufWriter::new(file);
+    write_mesh_to(&mut writer, mesh, format).map_err(|e| io_error(path, e))?;
+    writer.flush().map_err(|e| io_error(path, e))
+}

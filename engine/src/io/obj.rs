@@ -1,0 +1,275 @@
+//! Wavefront OBJ reader and writer.
+//!
+//! Written here rather than through `tobj` because tobj renumbers vertices per object and drops
+//! unreferenced ones (so `v` counts and cross-object sharing are lost) and reports errors without
+//! line numbers. This reader keeps the file's global vertex numbering (welded position indices),
+//! supports `v/vt/vn` corners and negative (relative) indices, triangulates polygons, and keeps
+//! texture coordinates and normals per corner when every face has them.
+
+use std::io::Write;
+use std::path::Path;
+
+use glam::DVec3;
+
+use super::ReadLimits;
+use super::triangulate::triangulate_polygon;
+use crate::error::MeshError;
+use crate::mesh::{CornerAttributes, Mesh};
+
+/// One polygon corner as written in the file, resolved to 0-based indices.
+#[derive(Clone, Copy)]
+struct Corner {
+    position: i64,
+    uv: Option<i64>,
+    normal: Option<i64>,
+}
+
+fn parse_floats<const N: usize>(
+    mut tokens: std::str::SplitAsciiWhitespace<'_>,
+    path: &Path,
+    line: usize,
+    what: &str,
+) -> Result<[f32; N], MeshError> {
+    let mut out = [0f32; N];
+    for (k, slot) in out.iter_mut().enumerate() {
+        let token = tokens.next().ok_or_else(|| {
+            MeshError::parse(
+                path,
+                format!("line {line}"),
+                format!("{what} needs {N} numbers, found {k}"),
+            )
+        })?;
+        let value: f32 = token.parse().map_err(|_| {
+            MeshError::parse(
+                path,
+                format!("line {line}"),
+                format!("{what}: '{token}' is not a number"),
+            )
+        })?;
+        if !value.is_finite() {
+            return Err(MeshError::parse(
+                path,
+                format!("line {line}"),
+                format!("{what} has a non-finite coordinate '{token}'"),
+            ));
+        }
+        *slot = value;
+    }
+    Ok(out)
+}
+
+/// Resolves a 1-based or negative OBJ index against the number of elements seen so far.
+fn resolve(token: &str, seen: usize, path: &Path, line: usize) -> Result<i64, MeshError> {
+    let raw: i64 = token.parse().map_err(|_| {
+        MeshError::parse(
+            path,
+            format!("line {line}"),
+            format!("face index '{token}' is not an integer"),
+        )
+    })?;
+    match raw {
+        0 => Err(MeshError::parse(
+            path,
+            format!("line {line}"),
+            "face index 0 (OBJ indices start at 1)",
+        )),
+        r if r > 0 => Ok(r - 1),
+        r => {
+            let resolved = seen as i64 + r;
+            if resolved < 0 {
+                return Err(MeshError::parse(
+                    path,
+                    format!("line {line}"),
+                    format!("relative index {r} reaches before the first of {seen} elements"),
+                ));
+            }
+            Ok(resolved)
+        }
+    }
+}
+
+/// Reads an OBJ file's bytes.
+pub fn read_obj(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, MeshError> {
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        let line = bytes[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count()
+            + 1;
+        MeshError::parse(
+            path,
+            format!("line {line}"),
+            "not valid UTF-8 text (binary file?)",
+        )
+    })?;
+
+    let mut positions: Vec<[f32; 3]> = Vec::new();
+    let mut uvs: Vec<[f32; 2]> = Vec::new();
+    let mut normals: Vec<[f32; 3]> = Vec::new();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    let mut corner_uv: Vec<i64> = Vec::new();
+    let mut corner_normal: Vec<i64> = Vec::new();
+    let mut all_have_uv = true;
+    let mut all_have_normal = true;
+    // Line of each triangle, to name it when a forward reference turns out to be out of range.
+    let mut triangle_lines: Vec<u32> = Vec::new();
+    let mut polygon: Vec<Corner> = Vec::new();
+    let mut polygon_points: Vec<DVec3> = Vec::new();
+    let mut local_triangles: Vec<[usize; 3]> = Vec::new();
+
+    for (line_index, raw_line) in text.lines().enumerate() {
+        let line = line_index + 1;
+        let mut tokens = raw_line.split_ascii_whitespace();
+        let Some(keyword) = tokens.next() else {
+            continue;
+        };
+        match keyword {
+            "v" => {
+                limits.check_vertices(positions.len() as u64 + 1)?;
+                positions.push(parse_floats::<3>(tokens, path, line, "vertex")?);
+            }
+            "vt" => uvs.push(parse_floats::<2>(tokens, path, line, "texture coordinate")?),
+            "vn" => normals.push(parse_floats::<3>(tokens, path, line, "normal")?),
+            "f" | "fo" => {
+                polygon.clear();
+                for token in tokens {
+                    let mut parts = token.split('/');
+                    let position =
+                        resolve(parts.next().unwrap_or(""), positions.len(), path, line)?;
+                    let uv = match parts.next() {
+                        Some("") | None => None,
+                        Some(t) => Some(resolve(t, uvs.len(), path, line)?),
+                    };
+                    let normal = match parts.next() {
+                        Some("") | None => None,
+                        Some(t) => Some(resolve(t, normals.len(), path, line)?),
+                    };
+                    polygon.push(Corner {
+                        position,
+                        uv,
+                        normal,
+                    });
+                }
+                if polygon.len() < 3 {
+                    return Err(MeshError::parse(
+                        path,
+                        format!("line {line}"),
+                        format!(
+                            "face has {} corners; a face needs at least 3",
+                            polygon.len()
+                        ),
+                    ));
+                }
+                local_triangles.clear();
+                if polygon.len() == 3 {
+                    local_triangles.push([0, 1, 2]);
+                } else {
+                    // Positions of forward references are unknown yet; such polygons are fanned.
+                    let known = polygon
+                        .iter()
+                        .all(|c| (c.position as usize) < positions.len());
+                    polygon_points.clear();
+                    polygon_points.extend(polygon.iter().map(|c| {
+                        if known {
+                            let p = positions[c.position as usize];
+                            DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+                        } else {
+                            DVec3::ZERO
+                        }
+                    }));
+                    triangulate_polygon(&polygon_points, &mut local_triangles);
+                }
+                limits.check_faces((triangles.len() + local_triangles.len()) as u64)?;
+                for t in &local_triangles {
+                    let mut tri = [0u32; 3];
+                    for (slot, &k) in tri.iter_mut().zip(t) {
+                        let c = polygon[k];
+                        *slot = u32::try_from(c.position).map_err(|_| {
+                            MeshError::parse(
+                                path,
+                                format!("line {line}"),
+                                format!("vertex index {} too large", c.position + 1),
+                            )
+                        })?;
+                        match c.uv {
+                            Some(i) => corner_uv.push(i),
+                            None => all_have_uv = false,
+                        }
+                        match c.normal {
+                            Some(i) => corner_normal.push(i),
+                            None => all_have_normal = false,
+                        }
+                    }
+                    triangles.push(tri);
+                    triangle_lines.push(line as u32);
+                }
+            }
+            _ => {} // o, g, s, usemtl, mtllib, l, p, comments: not geometry we keep
+        }
+    }
+
+    let vertex_count = positions.len();
+    for (t, tri) in triangles.iter().enumerate() {
+        if let Some(&i) = tri.iter().find(|&&i| i as usize >= vertex_count) {
+            return Err(MeshError::parse(
+                path,
+                format!("line {}", triangle_lines[t]),
+                format!(
+                    "face refers to vertex {} but the file has {vertex_count} vertices",
+                    i as u64 + 1
+                ),
+            ));
+        }
+    }
+    let lookup = |indices: &[i64], table_len: usize, what: &str| -> Result<(), MeshError> {
+        if let Some((k, &i)) = indices
+            .iter()
+            .enumerate()
+            .find(|&(_, &i)| i as usize >= table_len)
+        {
+            return Err(MeshError::parse(
+                path,
+                format!("line {}", triangle_lines[k / 3]),
+                format!(
+                    "face refers to {what} {} but the file has {table_len}",
+                    i + 1
+                ),
+            ));
+        }
+        Ok(())
+    };
+    let mut corners = CornerAttributes::default();
+    if all_have_uv && !triangles.is_empty() {
+        lookup(&corner_uv, uvs.len(), "texture coordinate")?;
+        corners.uvs = Some(corner_uv.iter().map(|&i| uvs[i as usize]).collect());
+    }
+    if all_have_normal && !triangles.is_empty() {
+        lookup(&corner_normal, normals.len(), "normal")?;
+        corners.normals = Some(corner_normal.iter().map(|&i| normals[i as usize]).collect());
+    }
+    let mesh = Mesh {
+        positions,
+        triangles,
+        corners,
+    };
+    debug_assert!(mesh.check().is_ok());
+    Ok(mesh)
+}
+
+/// Writes positions and triangles as OBJ (1-based indices). Floats use the shortest representation
+/// that reads back to the same `f32`, so a write/read round trip is exact.
+pub fn write_obj(out: &mut impl Write, mesh: &Mesh) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "# meshlod: {} vertices, {} triangles",
+        mesh.vertex_count(),
+        mesh.face_count()
+    )?;
+    for p in &mesh.positions {
+        writeln!(out, "v {} {} {}", p[0], p[1], p[2])?;
+    }
+    for t in &mesh.triangles {
+        writeln!(out, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1)?;
+    }
+    Ok(())
+}

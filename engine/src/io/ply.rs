@@ -1,0 +1,552 @@
+//! Stanford PLY reader (ascii, binary little endian, binary big endian) and binary writer.
+//!
+//! The header is parsed first; before anything is allocated from its element counts, those counts
+//! are checked against the configured limits and against the bytes that actually follow, so a
+//! header that lies ("1e12 vertices" in a 1 kB file) is refused at once.
+
+use std::io::Write;
+use std::path::Path;
+
+use glam::DVec3;
+
+use super::ReadLimits;
+use super::triangulate::triangulate_polygon;
+use crate::error::MeshError;
+use crate::mesh::Mesh;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Encoding {
+    Ascii,
+    LittleEndian,
+    BigEndian,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Scalar {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+impl Scalar {
+    fn parse(name: &str) -> Option<Scalar> {
+        Some(match name {
+            "char" | "int8" => Scalar::I8,
+            "uchar" | "uint8" => Scalar::U8,
+            "short" | "int16" => Scalar::I16,
+            "ushort" | "uint16" => Scalar::U16,
+            "int" | "int32" => Scalar::I32,
+            "uint" | "uint32" => Scalar::U32,
+            "float" | "float32" => Scalar::F32,
+            "double" | "float64" => Scalar::F64,
+            _ => return None,
+        })
+    }
+
+    fn size(self) -> usize {
+        match self {
+            Scalar::I8 | Scalar::U8 => 1,
+            Scalar::I16 | Scalar::U16 => 2,
+            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
+            Scalar::F64 => 8,
+        }
+    }
+
+    fn is_integer(self) -> bool {
+        !matches!(self, Scalar::F32 | Scalar::F64)
+    }
+}
+
+#[derive(Debug, Clone)]
+enum Property {
+    Scalar {
+        name: String,
+        kind: Scalar,
+    },
+    List {
+        name: String,
+        count: Scalar,
+        item: Scalar,
+    },
+}
+
+#[derive(Debug, Clone)]
+struct Element {
+    name: String,
+    count: u64,
+    properties: Vec<Property>,
+}
+
+impl Element {
+    /// Fewest bytes one element can take in the binary encodings (lists may be empty).
+    fn min_binary_size(&self) -> u64 {
+        self.properties
+            .iter()
+            .map(|p| match p {
+                Property::Scalar { kind, .. } => kind.size() as u64,
+                Property::List { count, .. } => count.size() as u64,
+            })
+            .sum()
+    }
+}
+
+struct Header {
+    encoding: Encoding,
+    elements: Vec<Element>,
+    body_offset: usize,
+    body_line: usize,
+}
+
+fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, MeshError> {
+    const MAX_HEADER: usize = 1 << 20;
+    let search = &bytes[..bytes.len().min(MAX_HEADER)];
+    let end = find_subslice(search, b"end_header").ok_or_else(|| {
+        MeshError::parse(path, "header", "no 'end_header' line in the first 1 MiB")
+    })?;
+    let line_end = search[end..]
+        .iter()
+        .position(|&b| b == b'\n')
+        .map(|p| end + p + 1)
+        .unwrap_or(bytes.len());
+    let text = std::str::from_utf8(&bytes[..line_end])
+        .map_err(|_| MeshError::parse(path, "header", "header is not text"))?;
+
+    let mut encoding = None;
+    let mut elements: Vec<Element> = Vec::new();
+    let mut lines = text.lines().enumerate();
+    match lines.next() {
+        Some((_, l)) if l.trim() == "ply" => {}
+        _ => return Err(MeshError::parse(path, "line 1", "missing 'ply' magic")),
+    }
+    let mut body_line = 1;
+    for (i, l) in lines {
+        let line = i + 1;
+        body_line = line + 1;
+        let loc = || format!("line {line}");
+        let tokens: Vec<&str> = l.split_ascii_whitespace().collect();
+        match tokens.as_slice() {
+            [] => {}
+            ["comment", ..] | ["obj_info", ..] => {}
+            ["format", f, _version] => {
+                encoding = Some(match *f {
+                    "ascii" => Encoding::Ascii,
+                    "binary_little_endian" => Encoding::LittleEndian,
+                    "binary_big_endian" => Encoding::BigEndian,
+                    other => {
+                        return Err(MeshError::parse(
+                            path,
+                            loc(),
+                            format!("unknown format '{other}'"),
+                        ));
+                    }
+                })
+            }
+            ["element", name, count] => {
+                let count: u64 = count.parse().map_err(|_| {
+                    MeshError::parse(
+                        path,
+                        loc(),
+                        format!("element count '{count}' is not a non-negative integer"),
+                    )
+                })?;
+                elements.push(Element {
+                    name: name.to_string(),
+                    count,
+                    properties: Vec::new(),
+                });
+            }
+            ["property", "list", count, item, name] => {
+                let element = elements
+                    .last_mut()
+                    .ok_or_else(|| MeshError::parse(path, loc(), "property before any element"))?;
+                let count = Scalar::parse(count)
+                    .filter(|s| s.is_integer())
+                    .ok_or_else(|| {
+                        MeshError::parse(
+                            path,
+                            loc(),
+                            format!("list count type '{count}' is not an integer type"),
+                        )
+                    })?;
+                let item = Scalar::parse(item).ok_or_else(|| {
+                    MeshError::parse(path, loc(), format!("unknown type '{item}'"))
+                })?;
+                element.properties.push(Property::List {
+                    name: name.to_string(),
+                    count,
+                    item,
+                });
+            }
+            ["property", kind, name] => {
+                let element = elements
+                    .last_mut()
+                    .ok_or_else(|| MeshError::parse(path, loc(), "property before any element"))?;
+                let kind = Scalar::parse(kind).ok_or_else(|| {
+                    MeshError::parse(path, loc(), format!("unknown type '{kind}'"))
+                })?;
+                element.properties.push(Property::Scalar {
+                    name: name.to_string(),
+                    kind,
+                });
+            }
+            ["end_header"] => break,
+            _ => {
+                return Err(MeshError::parse(
+                    path,
+                    loc(),
+                    format!("unrecognised header line '{}'", l.trim()),
+                ));
+            }
+        }
+    }
+    let encoding = encoding.ok_or_else(|| MeshError::parse(path, "header", "no 'format' line"))?;
+    Ok(Header {
+        encoding,
+        elements,
+        body_offset: line_end,
+        body_line,
+    })
+}
+
+fn find_subslice(haystack: &[u8], needle: &[u8]) -> Option<usize> {
+    haystack.windows(needle.len()).position(|w| w == needle)
+}
+
+/// Source of property values for one element: ascii tokens or binary bytes.
+trait ValueSource {
+    fn next_value(&mut self, kind: Scalar) -> Result<f64, String>;
+    fn end_element(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+}
+
+struct BinarySource<'a> {
+    bytes: &'a [u8],
+    offset: usize,
+    big_endian: bool,
+}
+
+impl ValueSource for BinarySource<'_> {
+    fn next_value(&mut self, kind: Scalar) -> Result<f64, String> {
+        let size = kind.size();
+        let Some(raw) = self.bytes.get(self.offset..self.offset + size) else {
+            return Err(format!(
+                "file ends at byte {} in the middle of the data (truncated)",
+                self.bytes.len()
+            ));
+        };
+        self.offset += size;
+        let mut buf = [0u8; 8];
+        buf[..size].copy_from_slice(raw);
+        if self.big_endian {
+            buf[..size].reverse();
+        }
+        Ok(match kind {
+            Scalar::I8 => buf[0] as i8 as f64,
+            Scalar::U8 => buf[0] as f64,
+            Scalar::I16 => i16::from_le_bytes([buf[0], buf[1]]) as f64,
+            Scalar::U16 => u16::from_le_bytes([buf[0], buf[1]]) as f64,
+            Scalar::I32 => i32::from_le_bytes([buf[0], buf[1], buf[2], buf[3]]) as f64,
+            Scalar::U32 => u32::from_le_bytes([buf[0], buf[1], buf[2], buf[3]]) as f64,
+            Scalar::F32 => f32::from_le_bytes([buf[0], buf[1], buf[2], buf[3]]) as f64,
+            Scalar::F64 => f64::from_le_bytes(buf),
+        })
+    }
+}
+
+struct AsciiSource<'a> {
+    lines: std::iter::Enumerate<std::str::Lines<'a>>,
+    first_line: usize,
+    current: Option<(usize, std::str::SplitAsciiWhitespace<'a>)>,
+}
+
+impl AsciiSource<'_> {
+    fn line(&self) -> usize {
+        self.current
+            .as_ref()
+            .map(|(l, _)| self.first_line + l)
+            .unwrap_or(self.first_line)
+    }
+}
+
+impl ValueSource for AsciiSource<'_> {
+    fn next_value(&mut self, kind: Scalar) -> Result<f64, String> {
+        loop {
+            if self.current.is_none() {
+                match self.lines.next() {
+                    Some((i, l)) if !l.trim().is_empty() => {
+                        self.current = Some((i, l.split_ascii_whitespace()))
+                    }
+                    Some(_) => continue,
+                    None => {
+                        return Err(
+                            "file ends before all declared elements were read (truncated)".into(),
+                        );
+                    }
+                }
+            }
+            let line = self.line();
+            let (_, tokens) = self.current.as_mut().expect("set above");
+            let Some(token) = tokens.next() else {
+                return Err(format!("line {line} has too few values"));
+            };
+            let value: f64 = token
+                .parse()
+                .map_err(|_| format!("line {line}: '{token}' is not a number"))?;
+            if kind.is_integer() && value.fract() != 0.0 {
+                return Err(format!("line {line}: '{token}' should be an integer"));
+            }
+            return Ok(value);
+        }
+    }
+
+    fn end_element(&mut self) -> Result<(), String> {
+        // Each element is one line; a line with leftover values means the header lies about its
+        // properties.
+        let line = self.line();
+        if let Some((_, mut tokens)) = self.current.take()
+            && let Some(extra) = tokens.next()
+        {
+            return Err(format!(
+                "line {line} has an unexpected extra value '{extra}'"
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Reads a PLY file's bytes.
+pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, MeshError> {
+    let header = parse_header(bytes, path)?;
+    let body = &bytes[header.body_offset..];
+
+    // Refuse counts that the remaining bytes cannot hold, before allocating anything.
+    let mut needed: u64 = 0;
+    for e in &header.elements {
+        let per_element = match header.encoding {
+            Encoding::Ascii => 2, // at least one digit and a newline
+            _ => e.min_binary_size().max(1),
+        };
+        needed = needed.saturating_add(e.count.saturating_mul(per_element));
+        match e.name.as_str() {
+            "vertex" => limits.check_vertices(e.count)?,
+            "face" => limits.check_faces(e.count)?,
+            _ => {}
+        }
+    }
+    if needed > body.len() as u64 {
+        return Err(MeshError::parse(
+            path,
+            "header",
+            format!(
+                "declared elements need at least {needed} bytes but only {} follow the header (truncated or lying header)",
+                body.len()
+            ),
+        ));
+    }
+
+    let mut source: Box<dyn ValueSource> = match header.encoding {
+        Encoding::Ascii => {
+            let text = std::str::from_utf8(body)
+                .map_err(|_| MeshError::parse(path, "body", "ascii PLY body is not text"))?;
+            Box::new(AsciiSource {
+                lines: text.lines().enumerate(),
+                first_line: header.body_line,
+                current: None,
+            })
+        }
+        Encoding::LittleEndian => Box::new(BinarySource {
+            bytes: body,
+            offset: 0,
+            big_endian: false,
+        }),
+        Encoding::BigEndian => Box::new(BinarySource {
+            bytes: body,
+            offset: 0,
+            big_endian: true,
+        }),
+    };
+
+    let mut positions: Vec<[f32; 3]> = Vec::new();
+    let mut polygons: Vec<(usize, Vec<i64>)> = Vec::new();
+    let mut saw_vertex = false;
+    let mut face_list_seen = false;
+    for element in &header.elements {
+        let is_vertex = element.name == "vertex";
+        let is_face = element.name == "face";
+        let mut xyz_slots = [usize::MAX; 3];
+        if is_vertex {
+            saw_vertex = true;
+            for (k, p) in element.properties.iter().enumerate() {
+                if let Property::Scalar { name, .. } = p {
+                    match name.as_str() {
+                        "x" => xyz_slots[0] = k,
+                        "y" => xyz_slots[1] = k,
+                        "z" => xyz_slots[2] = k,
+                        _ => {}
+                    }
+                }
+            }
+            if xyz_slots.contains(&usize::MAX) {
+                return Err(MeshError::parse(
+                    path,
+                    "header",
+                    "vertex element lacks scalar x, y and z properties",
+                ));
+            }
+            positions.reserve(element.count as usize);
+        }
+        let index_list = if is_face {
+            let by_name = element.properties.iter().position(
+                |p| matches!(p, Property::List { name, .. } if name == "vertex_indices" || name == "vertex_index"),
+            );
+            let any_list = element
+                .properties
+                .iter()
+                .position(|p| matches!(p, Property::List { .. }));
+            let slot = by_name.or(any_list).ok_or_else(|| {
+                MeshError::parse(path, "header", "face element has no list of vertex indices")
+            })?;
+            face_list_seen = true;
+            Some(slot)
+        } else {
+            None
+        };
+        for i in 0..element.count {
+            let loc = |k: u64| format!("{} {k}", element.name);
+            let mut xyz = [0f64; 3];
+            let mut indices: Vec<i64> = Vec::new();
+            for (k, property) in element.properties.iter().enumerate() {
+                match property {
+                    Property::Scalar { kind, .. } => {
+                        let v = source
+                            .next_value(*kind)
+                            .map_err(|r| MeshError::parse(path, loc(i), r))?;
+                        if let Some(axis) = xyz_slots.iter().position(|&s| s == k) {
+                            xyz[axis] = v;
+                        }
+                    }
+                    Property::List { count, item, .. } => {
+                        let n = source
+                            .next_value(*count)
+                            .map_err(|r| MeshError::parse(path, loc(i), r))?;
+                        if n < 0.0 {
+                            return Err(MeshError::parse(
+                                path,
+                                loc(i),
+                                format!("negative list length {n}"),
+                            ));
+                        }
+                        let keep = index_list == Some(k);
+                        for _ in 0..n as u64 {
+                            let v = source
+                                .next_value(*item)
+                                .map_err(|r| MeshError::parse(path, loc(i), r))?;
+                            if keep {
+                                indices.push(v as i64);
+                            }
+                        }
+                    }
+                }
+            }
+            source
+                .end_element()
+                .map_err(|r| MeshError::parse(path, loc(i), r))?;
+            if is_vertex {
+                let p = [xyz[0] as f32, xyz[1] as f32, xyz[2] as f32];
+                if p.iter().any(|c| !c.is_finite()) {
+                    return Err(MeshError::parse(
+                        path,
+                        loc(i),
+                        format!("non-finite coordinate {xyz:?}"),
+                    ));
+                }
+                positions.push(p);
+            } else if is_face {
+                if indices.len() < 3 {
+                    return Err(MeshError::parse(
+                        path,
+                        loc(i),
+                        format!(
+                            "face has {} corners; a face needs at least 3",
+                            indices.len()
+                        ),
+                    ));
+                }
+                polygons.push((i as usize, indices));
+            }
+        }
+    }
+    if !saw_vertex {
+        return Err(MeshError::parse(path, "header", "no vertex element"));
+    }
+    if !face_list_seen {
+        // A point cloud: valid PLY, but meshlod needs faces. Returned as an empty-face mesh; the
+        // algorithms refuse it with an "empty mesh" error.
+    }
+
+    let vertex_count = positions.len();
+    let mut triangles: Vec<[u32; 3]> = Vec::with_capacity(polygons.len());
+    let mut local = Vec::new();
+    let mut points = Vec::new();
+    for (face, indices) in &polygons {
+        if let Some(&bad) = indices
+            .iter()
+            .find(|&&v| v < 0 || v as usize >= vertex_count)
+        {
+            return Err(MeshError::parse(
+                path,
+                format!("face {face}"),
+                format!("refers to vertex {bad} but the file has {vertex_count} vertices"),
+            ));
+        }
+        local.clear();
+        if indices.len() == 3 {
+            local.push([0, 1, 2]);
+        } else {
+            points.clear();
+            points.extend(indices.iter().map(|&v| {
+                let p = positions[v as usize];
+                DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+            }));
+            triangulate_polygon(&points, &mut local);
+        }
+        limits.check_faces((triangles.len() + local.len()) as u64)?;
+        triangles.extend(local.iter().map(|t| {
+            [
+                indices[t[0]] as u32,
+                indices[t[1]] as u32,
+                indices[t[2]] as u32,
+            ]
+        }));
+    }
+    Mesh::new(positions, triangles)
+}
+
+/// Writes a binary little-endian PLY: float x, y, z per vertex; uchar count + int indices per face.
+pub fn write_ply(out: &mut impl Write, mesh: &Mesh) -> std::io::Result<()> {
+    write!(
+        out,
+        "ply\nformat binary_little_endian 1.0\ncomment written by meshlod\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        mesh.vertex_count(),
+        mesh.face_count()
+    )?;
+    let mut buf = Vec::with_capacity(mesh.vertex_count() * 12 + mesh.face_count() * 13);
+    for p in &mesh.positions {
+        for c in p {
+            buf.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for t in &mesh.triangles {
+        buf.push(3);
+        for &i in t {
+            buf.extend_from_slice(&(i as i32).to_le_bytes());
+        }
+    }
+    out.write_all(&buf)
+}

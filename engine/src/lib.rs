@@ -1,0 +1,19 @@
+//! meshlod's geometry engine: mesh core, file I/O, validation, the Hausdorff instrument and the
+//! level-of-detail algorithms. Pure and synchronous: no async, no networking.
+//!
+//! Distances are reported in *paper units* (the reference mesh centred and scaled so the largest
+//! side of its bounding box spans [−1, 1]) and in *percent of the bounding-box diagonal*; see
+//! [`mesh::DistanceUnits`].
+
+pub mod bvh;
+pub mod error;
+pub mod hausdorff;
+pub mod io;
+pub mod mesh;
+pub mod procedural;
+mod rng;
+pub mod topology;
+pub mod validate;
+
+pub use error::MeshError;
+pub use mesh::{Bounds, DistanceUnits, FaceId, Mesh, VertexId};

@@ -1,0 +1,318 @@
+//! Validation report and cleaning.
+//!
+//! `validate` looks at a mesh as it is and counts what later algorithms care about; `clean` repairs
+//! what can be repaired without guessing (exact duplicates and degenerate faces) and leaves the rest
+//! (non-manifold edges and vertices, holes) to be reported and handled by the algorithms.
+
+use std::collections::HashMap;
+
+use serde::Serialize;
+
+use crate::mesh::{Bounds, Mesh};
+use crate::topology::{NO_EDGE, Topology, UnionFind};
+
+/// What [`validate`] found.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MeshReport {
+    /// Number of vertices (including unreferenced ones).
+    pub vertices: usize,
+    /// Number of triangles.
+    pub faces: usize,
+    /// Bounding box of all vertices (zeros for an empty mesh).
+    pub bbox_min: [f64; 3],
+    /// See `bbox_min`.
+    pub bbox_max: [f64; 3],
+    /// Length of the bounding-box diagonal.
+    pub bbox_diagonal: f64,
+    /// Faces that repeat a vertex index or have zero area.
+    pub degenerate_faces: usize,
+    /// Of those, faces that repeat a vertex index.
+    pub repeated_index_faces: usize,
+    /// Faces whose vertex set equals an earlier face's (each extra copy counts once).
+    pub duplicate_faces: usize,
+    /// Vertices no face uses.
+    pub unreferenced_vertices: usize,
+    /// Edges shared by one face.
+    pub boundary_edges: usize,
+    /// Closed chains of boundary edges (holes and outer borders).
+    pub boundary_loops: usize,
+    /// Edges shared by more than two faces.
+    pub non_manifold_edges: usize,
+    /// Vertices whose faces form more than one fan (bowties), or that lie on a non-manifold edge.
+    pub non_manifold_vertices: usize,
+    /// Pieces of surface connected through shared vertices.
+    pub components: usize,
+    /// Two-face edges that both faces traverse in the same direction.
+    pub inconsistently_oriented_edges: usize,
+    /// Whether the mesh is edge-manifold, vertex-manifold and consistently oriented.
+    pub is_manifold_oriented: bool,
+    /// Euler characteristic V − E + F over referenced vertices.
+    pub euler_characteristic: i64,
+}
+
+/// Counts what a mesh has.
+pub fn validate(mesh: &Mesh) -> MeshReport {
+    let topology = Topology::new(mesh);
+    let tris = &mesh.triangles;
+
+    let mut repeated_index_faces = 0;
+    let mut degenerate_faces = 0;
+    for (f, t) in tris.iter().enumerate() {
+        let repeated = t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
+        repeated_index_faces += repeated as usize;
+        degenerate_faces += (repeated || mesh.face_area_vector(f).length_squared() == 0.0) as usize;
+    }
+
+    let mut sorted: Vec<[u32; 3]> = tris
+        .iter()
+        .map(|t| {
+            let mut s = *t;
+            s.sort_unstable();
+            s
+        })
+        .collect();
+    sorted.sort_unstable();
+    let duplicate_faces = sorted.windows(2).filter(|w| w[0] == w[1]).count();
+
+    let referenced: Vec<bool> = (0..mesh.vertex_count())
+        .map(|v| !topology.vertex_faces.get(v).is_empty())
+        .collect();
+    let unreferenced_vertices = referenced.iter().filter(|&&r| !r).count();
+
+    let mut boundary_edges = 0;
+    let mut non_manifold_edges = 0;
+    let mut on_non_manifold_edge = vec![false; mesh.vertex_count()];
+    let mut inconsistently_oriented_edges = 0;
+    for (e, &[a, b]) in topology.edges.iter().enumerate() {
+        let faces = topology.edge_faces.get(e);
+        match faces.len() {
+            1 => boundary_edges += 1,
+            2 => {
+                let forward = |f: usize| {
+                    let t = tris[f];
+                    (0..3).any(|i| t[i] == a && t[(i + 1) % 3] == b)
+                };
+                if forward(faces[0].index()) == forward(faces[1].index()) {
+                    inconsistently_oriented_edges += 1;
+                }
+            }
+            _ => {
+                non_manifold_edges += 1;
+                on_non_manifold_edge[a as usize] = true;
+                on_non_manifold_edge[b as usize] = true;
+            }
+        }
+    }
+
+    let non_manifold_vertices = (0..mesh.vertex_count())
+        .filter(|&v| on_non_manifold_edge[v] || fan_count(mesh, &topology, v as u32) > 1)
+        .count();
+
+    let boundary_loops = count_boundary_loops(mesh, &topology);
+
+    let mut sets = UnionFind::new(mesh.vertex_count());
+    for t in tris {
+        sets.union(t[0], t[1]);
+        sets.union(t[1], t[2]);
+    }
+    let mut roots: Vec<u32> = (0..mesh.vertex_count() as u32)
+        .filter(|&v| referenced[v as usize])
+        .map(|v| sets.find(v))
+        .collect();
+    roots.sort_unstable();
+    roots.dedup();
+    let components = roots.len();
+
+    let bounds = mesh.bounds().unwrap_or(Bounds {
+        min: [0.0; 3],
+        max: [0.0; 3],
+    });
+    let referenced_count = (mesh.vertex_count() - unreferenced_vertices) as i64;
+    MeshReport {
+        vertices: mesh.vertex_count(),
+        faces: mesh.face_count(),
+        bbox_min: bounds.min,
+        bbox_max: bounds.max,
+        bbox_diagonal: bounds.diagonal(),
+        degenerate_faces,
+        repeated_index_faces,
+        duplicate_faces,
+        unreferenced_vertices,
+        boundary_edges,
+        boundary_loops,
+        non_manifold_edges,
+        non_manifold_vertices,
+        components,
+        inconsistently_oriented_edges,
+        is_manifold_oriented: non_manifold_edges == 0
+            && non_manifold_vertices == 0
+            && inconsistently_oriented_edges == 0,
+        euler_characteristic: referenced_count - topology.edges.len() as i64 + tris.len() as i64,
+    }
+}
+
+/// Number of fans (groups of faces connected through edges at `v`) around a vertex.
+pub(crate) fn fan_count(mesh: &Mesh, topology: &Topology, v: u32) -> usize {
+    let faces = topology.vertex_faces.get(v as usize);
+    if faces.len() <= 1 {
+        return faces.len();
+    }
+    let mut sets = UnionFind::new(faces.len());
+    for (i, f) in faces.iter().enumerate() {
+        let t = mesh.triangles[f.index()];
+        for corner in 0..3 {
+            let e = topology.face_edges[f.index()][corner];
+            let (a, b) = (t[corner], t[(corner + 1) % 3]);
+            if e == NO_EDGE || (a != v && b != v) {
+                continue;
+            }
+            for g in topology.edge_faces.get(e as usize) {
+                if let Some(j) = faces.iter().position(|h| h == g) {
+                    sets.union(i as u32, j as u32);
+                }
+            }
+        }
+    }
+    let mut roots: Vec<u32> = (0..faces.len() as u32).map(|i| sets.find(i)).collect();
+    roots.sort_unstable();
+    roots.dedup();
+    roots.len()
+}
+
+/// Counts closed walks over boundary half-edges (each taken in its face's direction).
+fn count_boundary_loops(mesh: &Mesh, topology: &Topology) -> usize {
+    let mut outgoing: HashMap<u32, Vec<u32>> = HashMap::new();
+    for (e, _) in topology.edges.iter().enumerate() {
+        let faces = topology.edge_faces.get(e);
+        if faces.len() != 1 {
+            continue;
+        }
+        let f = faces[0].index();
+        let corner = topology.face_edges[f]
+            .iter()
+            .position(|&x| x == e as u32)
+            .expect("edge belongs to its face");
+        let t = mesh.triangles[f];
+        outgoing
+            .entry(t[corner])
+            .or_default()
+            .push(t[(corner + 1) % 3]);
+    }
+    let mut loops = 0;
+    let mut starts: Vec<u32> = outgoing.keys().copied().collect();
+    starts.sort_unstable();
+    for start in starts {
+        while let Some(mut at) = outgoing.get_mut(&start).and_then(|v| v.pop()) {
+            loops += 1;
+            // Follow the chain until it returns to `start` or runs out (an open chain on an
+            // inconsistently oriented border still counts as one loop).
+            while at != start {
+                match outgoing.get_mut(&at).and_then(|v| v.pop()) {
+                    Some(next) => at = next,
+                    None => break,
+                }
+            }
+        }
+    }
+    loops
+}
+
+/// What [`clean`] changed.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
+pub struct CleanReport {
+    /// Vertices merged into an earlier vertex at exactly the same position.
+    pub welded_vertices: usize,
+    /// Faces dropped because they repeat a vertex (after welding) or have zero area.
+    pub removed_degenerate_faces: usize,
+    /// Faces dropped because an earlier face has the same vertex set.
+    pub removed_duplicate_faces: usize,
+    /// Vertices dropped because no face uses them.
+    pub removed_unreferenced_vertices: usize,
+}
+
+/// Welds exactly coincident vertices, drops degenerate and duplicate faces, and drops unreferenced
+/// vertices. Vertex and face order are otherwise kept. Per-corner attributes follow their faces.
+pub fn clean(mesh: &Mesh) -> (Mesh, CleanReport) {
+    let mut report = CleanReport::default();
+    // Weld: first vertex at a position wins. -0.0 and 0.0 are the same position.
+    let key = |p: &[f32; 3]| p.map(|c| if c == 0.0 { 0u32 } else { c.to_bits() });
+    let mut first_at: HashMap<[u32; 3], u32> = HashMap::with_capacity(mesh.vertex_count());
+    let weld: Vec<u32> = mesh
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(v, p)| *first_at.entry(key(p)).or_insert(v as u32))
+        .collect();
+    report.welded_vertices = weld
+        .iter()
+        .enumerate()
+        .filter(|&(v, &w)| v as u32 != w)
+        .count();
+
+    let mut seen: std::collections::HashSet<[u32; 3]> =
+        std::collections::HashSet::with_capacity(mesh.face_count());
+    let mut kept_faces = Vec::with_capacity(mesh.face_count());
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        let w = t.map(|v| weld[v as usize]);
+        if w[0] == w[1]
+            || w[1] == w[2]
+            || w[0] == w[2]
+            || mesh.face_area_vector(f).length_squared() == 0.0
+        {
+            report.removed_degenerate_faces += 1;
+            continue;
+        }
+        let mut sorted = w;
+        sorted.sort_unstable();
+        if !seen.insert(sorted) {
+            report.removed_duplicate_faces += 1;
+            continue;
+        }
+        kept_faces.push((f, w));
+    }
+
+    let mut new_index = vec![u32::MAX; mesh.vertex_count()];
+    let mut positions = Vec::new();
+    for &(_, w) in &kept_faces {
+        for v in w {
+            if new_index[v as usize] == u32::MAX {
+                new_index[v as usize] = u32::MAX - 1; // mark referenced; numbered below in vertex order
+            }
+        }
+    }
+    for (v, slot) in new_index.iter_mut().enumerate() {
+        if *slot != u32::MAX {
+            *slot = positions.len() as u32;
+            positions.push(mesh.positions[v]);
+        }
+    }
+    report.removed_unreferenced_vertices =
+        mesh.vertex_count() - report.welded_vertices - positions.len();
+    let triangles = kept_faces
+        .iter()
+        .map(|&(_, w)| w.map(|v| new_index[v as usize]))
+        .collect();
+    let kept: Vec<usize> = kept_faces.iter().map(|&(f, _)| f).collect();
+    let corners = crate::mesh::CornerAttributes {
+        uvs: mesh.corners.uvs.as_ref().map(|a| pick_corners(a, &kept)),
+        normals: mesh
+            .corners
+            .normals
+            .as_ref()
+            .map(|a| pick_corners(a, &kept)),
+    };
+    let cleaned = Mesh {
+        positions,
+        triangles,
+        corners,
+    };
+    debug_assert!(cleaned.check().is_ok());
+    (cleaned, report)
+}
+
+fn pick_corners<T: Copy>(attribute: &[T], faces: &[usize]) -> Vec<T> {
+    faces
+        .iter()
+        .flat_map(|&f| (0..3).map(move |c| attribute[3 * f + c]))
+        .collect()
+}
