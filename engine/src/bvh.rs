@@ -92,20 +92,10 @@ impl TriangleBvh {
                 self.corners.push(mesh.triangle_points(f as usize));
                 self.faces.push(f);
             }
-            self.nodes.push(Node {
-                min,
-                max,
-                start_or_right: start,
-                count: items.len() as u32,
-            });
+            self.nodes.push(Node { min, max, start_or_right: start, count: items.len() as u32 });
             return index;
         }
-        self.nodes.push(Node {
-            min,
-            max,
-            start_or_right: 0,
-            count: 0,
-        });
+        self.nodes.push(Node { min, max, start_or_right: 0, count: 0 });
         let axis = (max - min).max_position();
         let mid = items.len() / 2;
         items.select_nth_unstable_by(mid, |a, b| a.0[axis].total_cmp(&b.0[axis]));
@@ -129,19 +119,11 @@ impl TriangleBvh {
     /// Closest point on the surface to `query`. `hint` is a slot from an earlier result whose
     /// triangle is probably close; it only affects speed, never the answer.
     pub fn closest_point(&self, query: DVec3, hint: Option<u32>) -> ClosestPoint {
-        let mut best = ClosestPoint {
-            distance_squared: f64::INFINITY,
-            point: DVec3::ZERO,
-            slot: 0,
-        };
+        let mut best = ClosestPoint { distance_squared: f64::INFINITY, point: DVec3::ZERO, slot: 0 };
         if let Some(slot) = hint.filter(|&s| (s as usize) < self.corners.len()) {
             let [a, b, c] = self.corners[slot as usize];
             let p = closest_point_on_triangle(query, a, b, c);
-            best = ClosestPoint {
-                distance_squared: (p - query).length_squared(),
-                point: p,
-                slot,
-            };
+            best = ClosestPoint { distance_squared: (p - query).length_squared(), point: p, slot };
         }
         let mut stack: [u32; 64] = [0; 64];
         let mut depth = 1;
@@ -158,11 +140,7 @@ impl TriangleBvh {
                     let p = closest_point_on_triangle(query, a, b, c);
                     let d = (p - query).length_squared();
                     if d < best.distance_squared {
-                        best = ClosestPoint {
-                            distance_squared: d,
-                            point: p,
-                            slot: slot as u32,
-                        };
+                        best = ClosestPoint { distance_squared: d, point: p, slot: slot as u32 };
                     }
                 }
                 continue;
@@ -179,11 +157,7 @@ impl TriangleBvh {
             };
             // Push the farther child first so the nearer one is searched first. The median split
             // keeps the depth at ~log2(n / LEAF_SIZE), far below the stack size.
-            let (near, far) = if dl <= dr {
-                (left, right)
-            } else {
-                (right, left)
-            };
+            let (near, far) = if dl <= dr { (left, right) } else { (right, left) };
             stack[depth] = far;
             stack[depth + 1] = near;
             depth += 2;
@@ -242,20 +216,12 @@ pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec
         let on = |s: DVec3, e: DVec3| {
             let d = e - s;
             let len2 = d.length_squared();
-            let t = if len2 > 0.0 {
-                ((p - s).dot(d) / len2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
+            let t = if len2 > 0.0 { ((p - s).dot(d) / len2).clamp(0.0, 1.0) } else { 0.0 };
             s + d * t
         };
         return [on(a, b), on(b, c), on(c, a)]
             .into_iter()
-            .min_by(|x, y| {
-                (*x - p)
-                    .length_squared()
-                    .total_cmp(&(*y - p).length_squared())
-            })
+            .min_by(|x, y| (*x - p).length_squared().total_cmp(&(*y - p).length_squared()))
             .expect("three candidates");
     }
     let v = vb / denom;
@@ -276,11 +242,7 @@ mod tests {
         let mut rng = SplitMix64::new(7);
         let mut hint = None;
         for _ in 0..500 {
-            let q = DVec3::new(
-                rng.next_f64() * 3.0 - 1.5,
-                rng.next_f64() * 3.0 - 1.5,
-                rng.next_f64() * 3.0 - 1.5,
-            );
+            let q = DVec3::new(rng.next_f64() * 3.0 - 1.5, rng.next_f64() * 3.0 - 1.5, rng.next_f64() * 3.0 - 1.5);
             let brute = (0..mesh.face_count())
                 .map(|f| {
                     let [a, b, c] = mesh.triangle_points(f);
@@ -300,21 +262,12 @@ mod tests {
     #[test]
     fn closest_point_regions() {
         let (a, b, c) = (DVec3::ZERO, DVec3::X, DVec3::Y);
-        assert_eq!(
-            closest_point_on_triangle(DVec3::new(0.2, 0.2, 1.0), a, b, c),
-            DVec3::new(0.2, 0.2, 0.0)
-        );
-        assert_eq!(
-            closest_point_on_triangle(DVec3::new(-1.0, -1.0, 0.0), a, b, c),
-            a
-        );
-        assert_eq!(
-            closest_point_on_triangle(DVec3::new(0.5, -1.0, 0.0), a, b, c),
-            DVec3::new(0.5, 0.0, 0.0)
-        );
+        let inside = closest_point_on_triangle(DVec3::new(0.2, 0.2, 1.0), a, b, c);
+        assert!((inside - DVec3::new(0.2, 0.2, 0.0)).length() < 1e-15);
+        assert_eq!(closest_point_on_triangle(DVec3::new(-1.0, -1.0, 0.0), a, b, c), a);
+        assert_eq!(closest_point_on_triangle(DVec3::new(0.5, -1.0, 0.0), a, b, c), DVec3::new(0.5, 0.0, 0.0));
         // Degenerate (collinear) triangle.
-        let q =
-            closest_point_on_triangle(DVec3::new(0.5, 1.0, 0.0), a, b, DVec3::new(2.0, 0.0, 0.0));
+        let q = closest_point_on_triangle(DVec3::new(0.5, 1.0, 0.0), a, b, DVec3::new(2.0, 0.0, 0.0));
         assert!((q - DVec3::new(0.5, 0.0, 0.0)).length() < 1e-12);
     }
 }

@@ -83,15 +83,7 @@ pub enum MeshError {
 
 impl MeshError {
     /// Builds a [`MeshError::Parse`] error.
-    pub(crate) fn parse(
-        path: &std::path::Path,
-        location: impl Into<String>,
-        reason: impl Into<String>,
-    ) -> Self {
-        MeshError::Parse {
-            path: path.to_path_buf(),
-            location: location.into(),
-            reason: reason.into(),
-        }
+    pub(crate) fn parse(path: &std::path::Path, location: impl Into<String>, reason: impl Into<String>) -> Self {
+        MeshError::Parse { path: path.to_path_buf(), location: location.into(), reason: reason.into() }
     }
 }

@@ -51,13 +51,7 @@ impl HausdorffOptions {
 
 impl Default for HausdorffOptions {
     fn default() -> Self {
-        HausdorffOptions {
-            samples: None,
-            sample_vertices: true,
-            sample_edges: true,
-            sample_faces: true,
-            seed: 0x5eed,
-        }
+        HausdorffOptions { samples: None, sample_vertices: true, sample_edges: true, sample_faces: true, seed: 0x5eed }
     }
 }
 
@@ -98,42 +92,24 @@ pub struct HausdorffReport {
 }
 
 /// Symmetric Metro-style distance between `a` and `b`.
-pub fn hausdorff(
-    a: &Mesh,
-    b: &Mesh,
-    options: &HausdorffOptions,
-) -> Result<HausdorffReport, MeshError> {
-    let bounds = a.surface_bounds().ok_or(MeshError::Empty {
-        what: "mesh A has no faces",
-    })?;
+pub fn hausdorff(a: &Mesh, b: &Mesh, options: &HausdorffOptions) -> Result<HausdorffReport, MeshError> {
+    let bounds = a.surface_bounds().ok_or(MeshError::Empty { what: "mesh A has no faces" })?;
     if b.triangles.is_empty() {
-        return Err(MeshError::Empty {
-            what: "mesh B has no faces",
-        });
+        return Err(MeshError::Empty { what: "mesh B has no faces" });
     }
-    let n = options.samples.unwrap_or_else(|| {
-        a.vertex_count()
-            .max(b.vertex_count())
-            .max(HausdorffOptions::MIN_DEFAULT_SAMPLES)
-    });
+    let n = options
+        .samples
+        .unwrap_or_else(|| a.vertex_count().max(b.vertex_count()).max(HausdorffOptions::MIN_DEFAULT_SAMPLES));
     let ((bvh_a, samples_a), (bvh_b, samples_b)) = rayon::join(
-        || {
-            (
-                TriangleBvh::new(a).expect("a has faces"),
-                sample_surface(a, n, options),
-            )
-        },
-        || {
-            (
-                TriangleBvh::new(b).expect("b has faces"),
-                sample_surface(b, n, options),
-            )
-        },
+        || (TriangleBvh::new(a).expect("a has faces"), sample_surface(a, n, options)),
+        || (TriangleBvh::new(b).expect("b has faces"), sample_surface(b, n, options)),
     );
-    let (a_to_b, b_to_a) = rayon::join(
-        || directed(&samples_a, &bvh_b),
-        || directed(&samples_b, &bvh_a),
-    );
+    // f32 input carries ~1e-7 relative precision; distances below 1e-12 of the diagonal are the
+    // rounding of the closest-point computation itself (a sample on a face measured against the
+    // same face), so they are reported as exactly zero.
+    let noise_floor = NOISE_FLOOR * bounds.diagonal().max(b.surface_bounds().map_or(0.0, |bb| bb.diagonal()));
+    let (a_to_b, b_to_a) =
+        rayon::join(|| directed(&samples_a, &bvh_b, noise_floor), || directed(&samples_b, &bvh_a, noise_floor));
     let units = DistanceUnits::new(&bounds);
     let max = a_to_b.max.max(b_to_a.max);
     let mean = a_to_b.mean.max(b_to_a.mean);
@@ -150,8 +126,12 @@ pub fn hausdorff(
     })
 }
 
-/// One-sided distance from `samples` to the surface in `target`.
-pub fn directed(samples: &[DVec3], target: &TriangleBvh) -> DirectedDistance {
+/// Relative distance (of the bounding-box diagonal) below which a sample counts as on the surface.
+pub const NOISE_FLOOR: f64 = 1e-12;
+
+/// One-sided distance from `samples` to the surface in `target`; distances at or below
+/// `noise_floor` count as zero.
+pub fn directed(samples: &[DVec3], target: &TriangleBvh, noise_floor: f64) -> DirectedDistance {
     const CHUNK: usize = 2048;
     let (max, sum, sum_squares) = samples
         .par_chunks(CHUNK)
@@ -162,23 +142,17 @@ pub fn directed(samples: &[DVec3], target: &TriangleBvh) -> DirectedDistance {
                 let hit = target.closest_point(p, hint);
                 hint = Some(hit.slot);
                 let d = hit.distance();
-                max = max.max(d);
-                sum += d;
-                sum_squares += hit.distance_squared;
+                if d > noise_floor {
+                    max = max.max(d);
+                    sum += d;
+                    sum_squares += hit.distance_squared;
+                }
             }
             (max, sum, sum_squares)
         })
-        .reduce(
-            || (0.0, 0.0, 0.0),
-            |x, y| (x.0.max(y.0), x.1 + y.1, x.2 + y.2),
-        );
+        .reduce(|| (0.0, 0.0, 0.0), |x, y| (x.0.max(y.0), x.1 + y.1, x.2 + y.2));
     let count = samples.len().max(1) as f64;
-    DirectedDistance {
-        max,
-        mean: sum / count,
-        rms: (sum_squares / count).sqrt(),
-        samples: samples.len(),
-    }
+    DirectedDistance { max, mean: sum / count, rms: (sum_squares / count).sqrt(), samples: samples.len() }
 }
 
 /// Sample points on a mesh's surface as described in the module documentation. Samples come out
@@ -192,19 +166,11 @@ pub fn sample_surface(mesh: &Mesh, n: usize, options: &HausdorffOptions) -> Vec<
                 used[v as usize] = true;
             }
         }
-        samples.extend(
-            (0..mesh.vertex_count())
-                .filter(|&v| used[v])
-                .map(|v| mesh.point(v as u32)),
-        );
+        samples.extend((0..mesh.vertex_count()).filter(|&v| used[v]).map(|v| mesh.point(v as u32)));
     }
     if options.sample_edges && n > 0 {
         let topology = Topology::new(mesh);
-        let lengths: Vec<f64> = topology
-            .edges
-            .iter()
-            .map(|&[a, b]| (mesh.point(a) - mesh.point(b)).length())
-            .collect();
+        let lengths: Vec<f64> = topology.edges.iter().map(|&[a, b]| (mesh.point(a) - mesh.point(b)).length()).collect();
         let total: f64 = lengths.iter().sum();
         if total > 0.0 {
             let per_length = n as f64 / total;
@@ -265,11 +231,7 @@ mod tests {
     fn offset_plane_distance_is_exact() {
         // Two parallel unit squares 0.1 apart: every sample is exactly 0.1 away.
         let square = |z: f32| {
-            Mesh::new(
-                vec![[0., 0., z], [1., 0., z], [1., 1., z], [0., 1., z]],
-                vec![[0, 1, 2], [0, 2, 3]],
-            )
-            .unwrap()
+            Mesh::new(vec![[0., 0., z], [1., 0., z], [1., 1., z], [0., 1., z]], vec![[0, 1, 2], [0, 2, 3]]).unwrap()
         };
         let r = hausdorff(&square(0.0), &square(0.1), &HausdorffOptions::default()).unwrap();
         let d = 0.1f32 as f64;
@@ -283,31 +245,18 @@ mod tests {
     #[test]
     fn sample_counts_follow_options() {
         let m = procedural::icosphere(3);
-        let opts = HausdorffOptions {
-            samples: Some(5000),
-            ..Default::default()
-        };
+        let opts = HausdorffOptions { samples: Some(5000), ..Default::default() };
         let s = sample_surface(&m, 5000, &opts);
         // vertices + about n edge samples + about n face samples (carry may drop one of each).
         let expected = m.vertex_count() + 10_000;
-        assert!(
-            s.len() + 2 >= expected && s.len() <= expected,
-            "{} vs {expected}",
-            s.len()
-        );
+        assert!(s.len() + 2 >= expected && s.len() <= expected, "{} vs {expected}", s.len());
     }
 
     #[test]
     fn empty_mesh_is_refused() {
         let m = procedural::icosphere(1);
         let empty = Mesh::default();
-        assert!(matches!(
-            hausdorff(&m, &empty, &HausdorffOptions::default()),
-            Err(MeshError::Empty { .. })
-        ));
-        assert!(matches!(
-            hausdorff(&empty, &m, &HausdorffOptions::default()),
-            Err(MeshError::Empty { .. })
-        ));
+        assert!(matches!(hausdorff(&m, &empty, &HausdorffOptions::default()), Err(MeshError::Empty { .. })));
+        assert!(matches!(hausdorff(&empty, &m, &HausdorffOptions::default()), Err(MeshError::Empty { .. })));
     }
 }

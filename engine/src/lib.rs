@@ -6,6 +6,7 @@
 //! [`mesh::DistanceUnits`].
 
 pub mod bvh;
+pub mod datasets;
 pub mod error;
 pub mod hausdorff;
 pub mod io;

@@ -88,11 +88,7 @@ impl Bounds {
 impl Mesh {
     /// Builds a mesh, checking that coordinates are finite and indices are in range.
     pub fn new(positions: Vec<[f32; 3]>, triangles: Vec<[u32; 3]>) -> Result<Mesh, MeshError> {
-        let mesh = Mesh {
-            positions,
-            triangles,
-            corners: CornerAttributes::default(),
-        };
+        let mesh = Mesh { positions, triangles, corners: CornerAttributes::default() };
         mesh.check()?;
         Ok(mesh)
     }
@@ -101,33 +97,18 @@ impl Mesh {
     pub fn check(&self) -> Result<(), MeshError> {
         for (vertex, p) in self.positions.iter().enumerate() {
             if let Some(value) = p.iter().find(|c| !c.is_finite()) {
-                return Err(MeshError::NonFiniteCoordinate {
-                    vertex,
-                    value: value.to_string(),
-                });
+                return Err(MeshError::NonFiniteCoordinate { vertex, value: value.to_string() });
             }
         }
         let vertex_count = self.positions.len();
         for (face, t) in self.triangles.iter().enumerate() {
             if let Some(&index) = t.iter().find(|&&i| i as usize >= vertex_count) {
-                return Err(MeshError::IndexOutOfRange {
-                    face,
-                    index: index as i64,
-                    vertex_count,
-                });
+                return Err(MeshError::IndexOutOfRange { face, index: index as i64, vertex_count });
             }
         }
         let corner_count = 3 * self.triangles.len();
-        let uv_ok = self
-            .corners
-            .uvs
-            .as_ref()
-            .is_none_or(|u| u.len() == corner_count);
-        let normal_ok = self
-            .corners
-            .normals
-            .as_ref()
-            .is_none_or(|n| n.len() == corner_count);
+        let uv_ok = self.corners.uvs.as_ref().is_none_or(|u| u.len() == corner_count);
+        let normal_ok = self.corners.normals.as_ref().is_none_or(|n| n.len() == corner_count);
         if !uv_ok || !normal_ok {
             return Err(MeshError::InvalidParameter {
                 name: "corners",
@@ -186,10 +167,7 @@ impl Mesh {
                 max = max.max(p);
             }
         }
-        (!self.triangles.is_empty()).then(|| Bounds {
-            min: min.into(),
-            max: max.into(),
-        })
+        (!self.triangles.is_empty()).then(|| Bounds { min: min.into(), max: max.into() })
     }
 
     /// Bounding box of all vertices; `None` if there are none.
@@ -201,10 +179,7 @@ impl Mesh {
             min = min.min(p);
             max = max.max(p);
         }
-        (!self.positions.is_empty()).then(|| Bounds {
-            min: min.into(),
-            max: max.into(),
-        })
+        (!self.positions.is_empty()).then(|| Bounds { min: min.into(), max: max.into() })
     }
 
     /// Total surface area.
@@ -227,28 +202,17 @@ pub struct DistanceUnits {
 impl DistanceUnits {
     /// Units relative to `bounds`.
     pub fn new(bounds: &Bounds) -> Self {
-        DistanceUnits {
-            largest_side: bounds.largest_side(),
-            diagonal: bounds.diagonal(),
-        }
+        DistanceUnits { largest_side: bounds.largest_side(), diagonal: bounds.diagonal() }
     }
 
     /// Converts an absolute distance to paper units.
     pub fn to_paper(&self, distance: f64) -> f64 {
-        if self.largest_side > 0.0 {
-            distance * 2.0 / self.largest_side
-        } else {
-            0.0
-        }
+        if self.largest_side > 0.0 { distance * 2.0 / self.largest_side } else { 0.0 }
     }
 
     /// Converts an absolute distance to percent of the bounding-box diagonal.
     pub fn to_diagonal_percent(&self, distance: f64) -> f64 {
-        if self.diagonal > 0.0 {
-            distance / self.diagonal * 100.0
-        } else {
-            0.0
-        }
+        if self.diagonal > 0.0 { distance / self.diagonal * 100.0 } else { 0.0 }
     }
 
     /// Converts a distance in paper units back to an absolute distance.

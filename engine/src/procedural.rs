@@ -11,15 +11,8 @@ use glam::DVec3;
 use crate::mesh::Mesh;
 
 fn to_mesh(points: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Mesh {
-    let positions = points
-        .into_iter()
-        .map(|p| [p.x as f32, p.y as f32, p.z as f32])
-        .collect();
-    let mesh = Mesh {
-        positions,
-        triangles,
-        corners: Default::default(),
-    };
+    let positions = points.into_iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect();
+    let mesh = Mesh { positions, triangles, corners: Default::default() };
     debug_assert!(mesh.check().is_ok());
     mesh
 }
@@ -140,10 +133,7 @@ pub fn sharp_box(n: u32) -> Mesh {
                     key[ua] = 2 * i as i64 - n as i64;
                     key[va] = 2 * j as i64 - n as i64;
                     let v = *index.entry(key).or_insert_with(|| {
-                        points.push(
-                            DVec3::new(key[0] as f64, key[1] as f64, key[2] as f64) / n as f64
-                                * half,
-                        );
+                        points.push(DVec3::new(key[0] as f64, key[1] as f64, key[2] as f64) / n as f64 * half);
                         points.len() as u32 - 1
                     });
                     grid[(i * (n + 1) + j) as usize] = v;
@@ -164,9 +154,8 @@ pub fn sharp_box(n: u32) -> Mesh {
 /// Deterministic value noise in [-1, 1] from an integer lattice hash, smoothly interpolated.
 fn value_noise(x: f64, y: f64, seed: u64) -> f64 {
     let hash = |i: i64, j: i64| {
-        let mut h = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
-            ^ (j as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
-            ^ seed;
+        let mut h =
+            (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (j as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F) ^ seed;
         h ^= h >> 33;
         h = h.wrapping_mul(0xFF51_AFD7_ED55_8CCD);
         h ^= h >> 33;
@@ -188,10 +177,7 @@ pub fn terrain(n: u32, seed: u64) -> Mesh {
     let mut points = Vec::with_capacity(((n + 1) * (n + 1)) as usize);
     for i in 0..=n {
         for j in 0..=n {
-            let (x, y) = (
-                2.0 * i as f64 / n as f64 - 1.0,
-                2.0 * j as f64 / n as f64 - 1.0,
-            );
+            let (x, y) = (2.0 * i as f64 / n as f64 - 1.0, 2.0 * j as f64 / n as f64 - 1.0);
             let height: f64 = (0..5)
                 .map(|octave| {
                     let f = 2f64.powi(octave);
@@ -221,19 +207,12 @@ pub fn bumpy_blob(rings: u32, segments: u32, seed: u64) -> Mesh {
             + 0.08 * value_noise(3.0 * dir.x + 7.0, 3.0 * dir.y + 3.0 * dir.z, seed);
         1.0 + bumps + 0.1 * dir.z * dir.z
     };
-    let mut points = vec![
-        DVec3::new(0.0, 0.0, radius(DVec3::Z)),
-        DVec3::new(0.0, 0.0, -radius(-DVec3::Z)),
-    ];
+    let mut points = vec![DVec3::new(0.0, 0.0, radius(DVec3::Z)), DVec3::new(0.0, 0.0, -radius(-DVec3::Z))];
     for r in 1..rings {
         let theta = PI * r as f64 / rings as f64;
         for s in 0..segments {
             let phi = TAU * s as f64 / segments as f64;
-            let dir = DVec3::new(
-                theta.sin() * phi.cos(),
-                theta.sin() * phi.sin(),
-                theta.cos(),
-            );
+            let dir = DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
             points.push(dir * radius(dir));
         }
     }
@@ -245,12 +224,7 @@ pub fn bumpy_blob(rings: u32, segments: u32, seed: u64) -> Mesh {
     }
     for r in 1..rings - 1 {
         for s in 0..segments {
-            let (a, b, c, d) = (
-                ring(r, s),
-                ring(r + 1, s),
-                ring(r + 1, s + 1),
-                ring(r, s + 1),
-            );
+            let (a, b, c, d) = (ring(r, s), ring(r + 1, s), ring(r + 1, s + 1), ring(r, s + 1));
             triangles.push([a, b, c]);
             triangles.push([a, c, d]);
         }

@@ -29,13 +29,7 @@ impl<T: Copy> Csr<T> {
             items[cursor[k] as usize] = Some(item);
             cursor[k] += 1;
         }
-        Csr {
-            offsets,
-            items: items
-                .into_iter()
-                .map(|i| i.expect("every slot is filled"))
-                .collect(),
-        }
+        Csr { offsets, items: items.into_iter().map(|i| i.expect("every slot is filled")).collect() }
     }
 
     /// Items of key `i`.
@@ -77,9 +71,7 @@ impl Topology {
         let tris = &mesh.triangles;
         let vertex_faces = Csr::from_pairs(
             mesh.vertex_count(),
-            tris.iter()
-                .enumerate()
-                .flat_map(|(f, t)| t.iter().map(move |&v| (v as usize, FaceId(f as u32)))),
+            tris.iter().enumerate().flat_map(|(f, t)| t.iter().map(move |&v| (v as usize, FaceId(f as u32)))),
         );
         let mut half: Vec<(u32, u32, u32, u8)> = Vec::with_capacity(tris.len() * 3);
         for (f, t) in tris.iter().enumerate() {
@@ -104,12 +96,7 @@ impl Topology {
             pairs.push((e, FaceId(f)));
         }
         let edge_faces = Csr::from_pairs(edges.len(), pairs.into_iter());
-        Topology {
-            vertex_faces,
-            edges,
-            edge_faces,
-            face_edges,
-        }
+        Topology { vertex_faces, edges, edge_faces, face_edges }
     }
 }
 
@@ -123,10 +110,7 @@ pub struct UnionFind {
 impl UnionFind {
     /// `n` singleton sets.
     pub fn new(n: usize) -> Self {
-        UnionFind {
-            parent: (0..n as u32).collect(),
-            size: vec![1; n],
-        }
+        UnionFind { parent: (0..n as u32).collect(), size: vec![1; n] }
     }
 
     /// Representative of `x`'s set.

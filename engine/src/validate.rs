@@ -74,9 +74,7 @@ pub fn validate(mesh: &Mesh) -> MeshReport {
     sorted.sort_unstable();
     let duplicate_faces = sorted.windows(2).filter(|w| w[0] == w[1]).count();
 
-    let referenced: Vec<bool> = (0..mesh.vertex_count())
-        .map(|v| !topology.vertex_faces.get(v).is_empty())
-        .collect();
+    let referenced: Vec<bool> = (0..mesh.vertex_count()).map(|v| !topology.vertex_faces.get(v).is_empty()).collect();
     let unreferenced_vertices = referenced.iter().filter(|&&r| !r).count();
 
     let mut boundary_edges = 0;
@@ -115,18 +113,13 @@ pub fn validate(mesh: &Mesh) -> MeshReport {
         sets.union(t[0], t[1]);
         sets.union(t[1], t[2]);
     }
-    let mut roots: Vec<u32> = (0..mesh.vertex_count() as u32)
-        .filter(|&v| referenced[v as usize])
-        .map(|v| sets.find(v))
-        .collect();
+    let mut roots: Vec<u32> =
+        (0..mesh.vertex_count() as u32).filter(|&v| referenced[v as usize]).map(|v| sets.find(v)).collect();
     roots.sort_unstable();
     roots.dedup();
     let components = roots.len();
 
-    let bounds = mesh.bounds().unwrap_or(Bounds {
-        min: [0.0; 3],
-        max: [0.0; 3],
-    });
+    let bounds = mesh.bounds().unwrap_or(Bounds { min: [0.0; 3], max: [0.0; 3] });
     let referenced_count = (mesh.vertex_count() - unreferenced_vertices) as i64;
     MeshReport {
         vertices: mesh.vertex_count(),
@@ -188,15 +181,9 @@ fn count_boundary_loops(mesh: &Mesh, topology: &Topology) -> usize {
             continue;
         }
         let f = faces[0].index();
-        let corner = topology.face_edges[f]
-            .iter()
-            .position(|&x| x == e as u32)
-            .expect("edge belongs to its face");
+        let corner = topology.face_edges[f].iter().position(|&x| x == e as u32).expect("edge belongs to its face");
         let t = mesh.triangles[f];
-        outgoing
-            .entry(t[corner])
-            .or_default()
-            .push(t[(corner + 1) % 3]);
+        outgoing.entry(t[corner]).or_default().push(t[(corner + 1) % 3]);
     }
     let mut loops = 0;
     let mut starts: Vec<u32> = outgoing.keys().copied().collect();
@@ -237,28 +224,15 @@ pub fn clean(mesh: &Mesh) -> (Mesh, CleanReport) {
     // Weld: first vertex at a position wins. -0.0 and 0.0 are the same position.
     let key = |p: &[f32; 3]| p.map(|c| if c == 0.0 { 0u32 } else { c.to_bits() });
     let mut first_at: HashMap<[u32; 3], u32> = HashMap::with_capacity(mesh.vertex_count());
-    let weld: Vec<u32> = mesh
-        .positions
-        .iter()
-        .enumerate()
-        .map(|(v, p)| *first_at.entry(key(p)).or_insert(v as u32))
-        .collect();
-    report.welded_vertices = weld
-        .iter()
-        .enumerate()
-        .filter(|&(v, &w)| v as u32 != w)
-        .count();
+    let weld: Vec<u32> =
+        mesh.positions.iter().enumerate().map(|(v, p)| *first_at.entry(key(p)).or_insert(v as u32)).collect();
+    report.welded_vertices = weld.iter().enumerate().filter(|&(v, &w)| v as u32 != w).count();
 
-    let mut seen: std::collections::HashSet<[u32; 3]> =
-        std::collections::HashSet::with_capacity(mesh.face_count());
+    let mut seen: std::collections::HashSet<[u32; 3]> = std::collections::HashSet::with_capacity(mesh.face_count());
     let mut kept_faces = Vec::with_capacity(mesh.face_count());
     for (f, t) in mesh.triangles.iter().enumerate() {
         let w = t.map(|v| weld[v as usize]);
-        if w[0] == w[1]
-            || w[1] == w[2]
-            || w[0] == w[2]
-            || mesh.face_area_vector(f).length_squared() == 0.0
-        {
+        if w[0] == w[1] || w[1] == w[2] || w[0] == w[2] || mesh.face_area_vector(f).length_squared() == 0.0 {
             report.removed_degenerate_faces += 1;
             continue;
         }
@@ -286,33 +260,18 @@ pub fn clean(mesh: &Mesh) -> (Mesh, CleanReport) {
             positions.push(mesh.positions[v]);
         }
     }
-    report.removed_unreferenced_vertices =
-        mesh.vertex_count() - report.welded_vertices - positions.len();
-    let triangles = kept_faces
-        .iter()
-        .map(|&(_, w)| w.map(|v| new_index[v as usize]))
-        .collect();
+    report.removed_unreferenced_vertices = mesh.vertex_count() - report.welded_vertices - positions.len();
+    let triangles = kept_faces.iter().map(|&(_, w)| w.map(|v| new_index[v as usize])).collect();
     let kept: Vec<usize> = kept_faces.iter().map(|&(f, _)| f).collect();
     let corners = crate::mesh::CornerAttributes {
         uvs: mesh.corners.uvs.as_ref().map(|a| pick_corners(a, &kept)),
-        normals: mesh
-            .corners
-            .normals
-            .as_ref()
-            .map(|a| pick_corners(a, &kept)),
+        normals: mesh.corners.normals.as_ref().map(|a| pick_corners(a, &kept)),
     };
-    let cleaned = Mesh {
-        positions,
-        triangles,
-        corners,
-    };
+    let cleaned = Mesh { positions, triangles, corners };
     debug_assert!(cleaned.check().is_ok());
     (cleaned, report)
 }
 
 fn pick_corners<T: Copy>(attribute: &[T], faces: &[usize]) -> Vec<T> {
-    faces
-        .iter()
-        .flat_map(|&f| (0..3).map(move |c| attribute[3 * f + c]))
-        .collect()
+    faces.iter().flat_map(|&f| (0..3).map(move |c| attribute[3 * f + c])).collect()
 }

@@ -114,11 +114,7 @@ pub fn run(cli: Cli) -> Result<()> {
                 }
             }
         }
-        Command::Convert {
-            input,
-            output,
-            clean: do_clean,
-        } => {
+        Command::Convert { input, output, clean: do_clean } => {
             let mut mesh = load(&input)?;
             if do_clean {
                 let (cleaned, report) = clean(&mesh);
@@ -127,23 +123,13 @@ pub fn run(cli: Cli) -> Result<()> {
             }
             write_mesh(&output, &mesh)?;
         }
-        Command::Hausdorff {
-            a,
-            b,
-            samples,
-            seed,
-            json,
-        } => {
+        Command::Hausdorff { a, b, samples, seed, json } => {
             if samples == Some(0) {
                 bail!("--samples must be at least 1");
             }
             let (mesh_a, mesh_b) = (load(&a)?, load(&b)?);
             let started = Instant::now();
-            let options = HausdorffOptions {
-                samples,
-                seed,
-                ..Default::default()
-            };
+            let options = HausdorffOptions { samples, seed, ..Default::default() };
             let report = hausdorff(&mesh_a, &mesh_b, &options)?;
             let seconds = started.elapsed().as_secs_f64();
             if json {
@@ -153,20 +139,11 @@ pub fn run(cli: Cli) -> Result<()> {
             } else {
                 println!(
                     "hausdorff {:.6} paper units ({:.4}% of diagonal), mean {:.6}, rms {:.6}, {} samples, {:.3} s",
-                    report.hausdorff,
-                    report.hausdorff_diag_pct,
-                    report.mean,
-                    report.rms,
-                    report.samples,
-                    seconds
+                    report.hausdorff, report.hausdorff_diag_pct, report.mean, report.rms, report.samples, seconds
                 );
             }
         }
-        Command::Generate {
-            shape,
-            output,
-            resolution,
-        } => {
+        Command::Generate { shape, output, resolution } => {
             if resolution == 0 {
                 bail!("--resolution must be at least 1");
             }

@@ -43,9 +43,8 @@ impl MeshFormat {
             return Some(MeshFormat::Ply);
         }
         let head = &bytes[..bytes.len().min(4096)];
-        let is_text = head.iter().all(|&b| {
-            b == b'\n' || b == b'\r' || b == b'\t' || (0x20..0x7f).contains(&b) || b >= 0x80
-        });
+        let is_text =
+            head.iter().all(|&b| b == b'\n' || b == b'\r' || b == b'\t' || (0x20..0x7f).contains(&b) || b >= 0x80);
         let has_obj_statement = head.split(|&b| b == b'\n').any(|line| {
             let line = line.trim_ascii_start();
             line.starts_with(b"v ") || line.starts_with(b"f ") || line.starts_with(b"#")
@@ -66,42 +65,28 @@ pub struct ReadLimits {
 impl Default for ReadLimits {
     /// 50 million vertices and 100 million triangles: about 2.4 GB of mesh in memory.
     fn default() -> Self {
-        ReadLimits {
-            max_vertices: 50_000_000,
-            max_faces: 100_000_000,
-        }
+        ReadLimits { max_vertices: 50_000_000, max_faces: 100_000_000 }
     }
 }
 
 impl ReadLimits {
     pub(crate) fn check_vertices(&self, count: u64) -> Result<(), MeshError> {
         if count > self.max_vertices {
-            return Err(MeshError::TooLarge {
-                what: "vertices",
-                count,
-                limit: self.max_vertices,
-            });
+            return Err(MeshError::TooLarge { what: "vertices", count, limit: self.max_vertices });
         }
         Ok(())
     }
 
     pub(crate) fn check_faces(&self, count: u64) -> Result<(), MeshError> {
         if count > self.max_faces {
-            return Err(MeshError::TooLarge {
-                what: "faces",
-                count,
-                limit: self.max_faces,
-            });
+            return Err(MeshError::TooLarge { what: "faces", count, limit: self.max_faces });
         }
         Ok(())
     }
 }
 
 fn io_error(path: &Path, err: std::io::Error) -> MeshError {
-    MeshError::Io {
-        path: path.to_path_buf(),
-        message: err.to_string(),
-    }
+    MeshError::Io { path: path.to_path_buf(), message: err.to_string() }
 }
 
 /// Reads a mesh from bytes in a known or sniffed format. `name` is used in error messages.
@@ -111,11 +96,9 @@ pub fn read_mesh_bytes(
     name: &Path,
     limits: &ReadLimits,
 ) -> Result<Mesh, MeshError> {
-    let format = format.or_else(|| MeshFormat::sniff(bytes)).ok_or_else(|| {
-        MeshError::UnsupportedFormat {
-            path: name.to_path_buf(),
-            reason: "neither the extension nor the content says OBJ or PLY".into(),
-        }
+    let format = format.or_else(|| MeshFormat::sniff(bytes)).ok_or_else(|| MeshError::UnsupportedFormat {
+        path: name.to_path_buf(),
+        reason: "neither the extension nor the content says OBJ or PLY".into(),
     })?;
     match format {
         MeshFormat::Obj => read_obj(bytes, name, limits),
@@ -129,10 +112,7 @@ pub fn read_mesh(path: impl AsRef<Path>) -> Result<Mesh, MeshError> {
 }
 
 /// [`read_mesh`] with explicit limits.
-pub fn read_mesh_with_limits(
-    path: impl AsRef<Path>,
-    limits: &ReadLimits,
-) -> Result<Mesh, MeshError> {
+pub fn read_mesh_with_limits(path: impl AsRef<Path>, limits: &ReadLimits) -> Result<Mesh, MeshError> {
     let path = path.as_ref();
     let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
     let format = MeshFormat::from_extension(path).or_else(|| MeshFormat::sniff(&bytes));

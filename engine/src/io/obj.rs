@@ -33,18 +33,10 @@ fn parse_floats<const N: usize>(
     let mut out = [0f32; N];
     for (k, slot) in out.iter_mut().enumerate() {
         let token = tokens.next().ok_or_else(|| {
-            MeshError::parse(
-                path,
-                format!("line {line}"),
-                format!("{what} needs {N} numbers, found {k}"),
-            )
+            MeshError::parse(path, format!("line {line}"), format!("{what} needs {N} numbers, found {k}"))
         })?;
         let value: f32 = token.parse().map_err(|_| {
-            MeshError::parse(
-                path,
-                format!("line {line}"),
-                format!("{what}: '{token}' is not a number"),
-            )
+            MeshError::parse(path, format!("line {line}"), format!("{what}: '{token}' is not a number"))
         })?;
         if !value.is_finite() {
             return Err(MeshError::parse(
@@ -61,18 +53,10 @@ fn parse_floats<const N: usize>(
 /// Resolves a 1-based or negative OBJ index against the number of elements seen so far.
 fn resolve(token: &str, seen: usize, path: &Path, line: usize) -> Result<i64, MeshError> {
     let raw: i64 = token.parse().map_err(|_| {
-        MeshError::parse(
-            path,
-            format!("line {line}"),
-            format!("face index '{token}' is not an integer"),
-        )
+        MeshError::parse(path, format!("line {line}"), format!("face index '{token}' is not an integer"))
     })?;
     match raw {
-        0 => Err(MeshError::parse(
-            path,
-            format!("line {line}"),
-            "face index 0 (OBJ indices start at 1)",
-        )),
+        0 => Err(MeshError::parse(path, format!("line {line}"), "face index 0 (OBJ indices start at 1)")),
         r if r > 0 => Ok(r - 1),
         r => {
             let resolved = seen as i64 + r;
@@ -91,16 +75,8 @@ fn resolve(token: &str, seen: usize, path: &Path, line: usize) -> Result<i64, Me
 /// Reads an OBJ file's bytes.
 pub fn read_obj(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, MeshError> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
-        let line = bytes[..e.valid_up_to()]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count()
-            + 1;
-        MeshError::parse(
-            path,
-            format!("line {line}"),
-            "not valid UTF-8 text (binary file?)",
-        )
+        let line = bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count() + 1;
+        MeshError::parse(path, format!("line {line}"), "not valid UTF-8 text (binary file?)")
     })?;
 
     let mut positions: Vec<[f32; 3]> = Vec::new();
@@ -134,8 +110,7 @@ pub fn read_obj(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
                 polygon.clear();
                 for token in tokens {
                     let mut parts = token.split('/');
-                    let position =
-                        resolve(parts.next().unwrap_or(""), positions.len(), path, line)?;
+                    let position = resolve(parts.next().unwrap_or(""), positions.len(), path, line)?;
                     let uv = match parts.next() {
                         Some("") | None => None,
                         Some(t) => Some(resolve(t, uvs.len(), path, line)?),
@@ -144,20 +119,13 @@ pub fn read_obj(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
                         Some("") | None => None,
                         Some(t) => Some(resolve(t, normals.len(), path, line)?),
                     };
-                    polygon.push(Corner {
-                        position,
-                        uv,
-                        normal,
-                    });
+                    polygon.push(Corner { position, uv, normal });
                 }
                 if polygon.len() < 3 {
                     return Err(MeshError::parse(
                         path,
                         format!("line {line}"),
-                        format!(
-                            "face has {} corners; a face needs at least 3",
-                            polygon.len()
-                        ),
+                        format!("face has {} corners; a face needs at least 3", polygon.len()),
                     ));
                 }
                 local_triangles.clear();
@@ -165,9 +133,7 @@ pub fn read_obj(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
                     local_triangles.push([0, 1, 2]);
                 } else {
                     // Positions of forward references are unknown yet; such polygons are fanned.
-                    let known = polygon
-                        .iter()
-                        .all(|c| (c.position as usize) < positions.len());
+                    let known = polygon.iter().all(|c| (c.position as usize) < positions.len());
                     polygon_points.clear();
                     polygon_points.extend(polygon.iter().map(|c| {
                         if known {
@@ -214,26 +180,16 @@ pub fn read_obj(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
             return Err(MeshError::parse(
                 path,
                 format!("line {}", triangle_lines[t]),
-                format!(
-                    "face refers to vertex {} but the file has {vertex_count} vertices",
-                    i as u64 + 1
-                ),
+                format!("face refers to vertex {} but the file has {vertex_count} vertices", i as u64 + 1),
             ));
         }
     }
     let lookup = |indices: &[i64], table_len: usize, what: &str| -> Result<(), MeshError> {
-        if let Some((k, &i)) = indices
-            .iter()
-            .enumerate()
-            .find(|&(_, &i)| i as usize >= table_len)
-        {
+        if let Some((k, &i)) = indices.iter().enumerate().find(|&(_, &i)| i as usize >= table_len) {
             return Err(MeshError::parse(
                 path,
                 format!("line {}", triangle_lines[k / 3]),
-                format!(
-                    "face refers to {what} {} but the file has {table_len}",
-                    i + 1
-                ),
+                format!("face refers to {what} {} but the file has {table_len}", i + 1),
             ));
         }
         Ok(())
@@ -247,11 +203,7 @@ pub fn read_obj(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
         lookup(&corner_normal, normals.len(), "normal")?;
         corners.normals = Some(corner_normal.iter().map(|&i| normals[i as usize]).collect());
     }
-    let mesh = Mesh {
-        positions,
-        triangles,
-        corners,
-    };
+    let mesh = Mesh { positions, triangles, corners };
     debug_assert!(mesh.check().is_ok());
     Ok(mesh)
 }
@@ -259,12 +211,7 @@ pub fn read_obj(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
 /// Writes positions and triangles as OBJ (1-based indices). Floats use the shortest representation
 /// that reads back to the same `f32`, so a write/read round trip is exact.
 pub fn write_obj(out: &mut impl Write, mesh: &Mesh) -> std::io::Result<()> {
-    writeln!(
-        out,
-        "# meshlod: {} vertices, {} triangles",
-        mesh.vertex_count(),
-        mesh.face_count()
-    )?;
+    writeln!(out, "# meshlod: {} vertices, {} triangles", mesh.vertex_count(), mesh.face_count())?;
     for p in &mesh.positions {
         writeln!(out, "v {} {} {}", p[0], p[1], p[2])?;
     }

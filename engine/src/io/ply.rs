@@ -64,15 +64,8 @@ impl Scalar {
 
 #[derive(Debug, Clone)]
 enum Property {
-    Scalar {
-        name: String,
-        kind: Scalar,
-    },
-    List {
-        name: String,
-        count: Scalar,
-        item: Scalar,
-    },
+    Scalar { name: String, kind: Scalar },
+    List { name: String, count: Scalar, item: Scalar },
 }
 
 #[derive(Debug, Clone)]
@@ -105,16 +98,11 @@ struct Header {
 fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, MeshError> {
     const MAX_HEADER: usize = 1 << 20;
     let search = &bytes[..bytes.len().min(MAX_HEADER)];
-    let end = find_subslice(search, b"end_header").ok_or_else(|| {
-        MeshError::parse(path, "header", "no 'end_header' line in the first 1 MiB")
-    })?;
-    let line_end = search[end..]
-        .iter()
-        .position(|&b| b == b'\n')
-        .map(|p| end + p + 1)
-        .unwrap_or(bytes.len());
-    let text = std::str::from_utf8(&bytes[..line_end])
-        .map_err(|_| MeshError::parse(path, "header", "header is not text"))?;
+    let end = find_subslice(search, b"end_header")
+        .ok_or_else(|| MeshError::parse(path, "header", "no 'end_header' line in the first 1 MiB"))?;
+    let line_end = search[end..].iter().position(|&b| b == b'\n').map(|p| end + p + 1).unwrap_or(bytes.len());
+    let text =
+        std::str::from_utf8(&bytes[..line_end]).map_err(|_| MeshError::parse(path, "header", "header is not text"))?;
 
     let mut encoding = None;
     let mut elements: Vec<Element> = Vec::new();
@@ -138,79 +126,41 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header, MeshError> {
                     "binary_little_endian" => Encoding::LittleEndian,
                     "binary_big_endian" => Encoding::BigEndian,
                     other => {
-                        return Err(MeshError::parse(
-                            path,
-                            loc(),
-                            format!("unknown format '{other}'"),
-                        ));
+                        return Err(MeshError::parse(path, loc(), format!("unknown format '{other}'")));
                     }
                 })
             }
             ["element", name, count] => {
                 let count: u64 = count.parse().map_err(|_| {
-                    MeshError::parse(
-                        path,
-                        loc(),
-                        format!("element count '{count}' is not a non-negative integer"),
-                    )
+                    MeshError::parse(path, loc(), format!("element count '{count}' is not a non-negative integer"))
                 })?;
-                elements.push(Element {
-                    name: name.to_string(),
-                    count,
-                    properties: Vec::new(),
-                });
+                elements.push(Element { name: name.to_string(), count, properties: Vec::new() });
             }
             ["property", "list", count, item, name] => {
-                let element = elements
-                    .last_mut()
-                    .ok_or_else(|| MeshError::parse(path, loc(), "property before any element"))?;
-                let count = Scalar::parse(count)
-                    .filter(|s| s.is_integer())
-                    .ok_or_else(|| {
-                        MeshError::parse(
-                            path,
-                            loc(),
-                            format!("list count type '{count}' is not an integer type"),
-                        )
-                    })?;
-                let item = Scalar::parse(item).ok_or_else(|| {
-                    MeshError::parse(path, loc(), format!("unknown type '{item}'"))
+                let element =
+                    elements.last_mut().ok_or_else(|| MeshError::parse(path, loc(), "property before any element"))?;
+                let count = Scalar::parse(count).filter(|s| s.is_integer()).ok_or_else(|| {
+                    MeshError::parse(path, loc(), format!("list count type '{count}' is not an integer type"))
                 })?;
-                element.properties.push(Property::List {
-                    name: name.to_string(),
-                    count,
-                    item,
-                });
+                let item = Scalar::parse(item)
+                    .ok_or_else(|| MeshError::parse(path, loc(), format!("unknown type '{item}'")))?;
+                element.properties.push(Property::List { name: name.to_string(), count, item });
             }
             ["property", kind, name] => {
-                let element = elements
-                    .last_mut()
-                    .ok_or_else(|| MeshError::parse(path, loc(), "property before any element"))?;
-                let kind = Scalar::parse(kind).ok_or_else(|| {
-                    MeshError::parse(path, loc(), format!("unknown type '{kind}'"))
-                })?;
-                element.properties.push(Property::Scalar {
-                    name: name.to_string(),
-                    kind,
-                });
+                let element =
+                    elements.last_mut().ok_or_else(|| MeshError::parse(path, loc(), "property before any element"))?;
+                let kind = Scalar::parse(kind)
+                    .ok_or_else(|| MeshError::parse(path, loc(), format!("unknown type '{kind}'")))?;
+                element.properties.push(Property::Scalar { name: name.to_string(), kind });
             }
             ["end_header"] => break,
             _ => {
-                return Err(MeshError::parse(
-                    path,
-                    loc(),
-                    format!("unrecognised header line '{}'", l.trim()),
-                ));
+                return Err(MeshError::parse(path, loc(), format!("unrecognised header line '{}'", l.trim())));
             }
         }
     }
     let encoding = encoding.ok_or_else(|| MeshError::parse(path, "header", "no 'format' line"))?;
-    Ok(Header {
-        encoding,
-        elements,
-        body_offset: line_end,
-        body_line,
-    })
+    Ok(Header { encoding, elements, body_offset: line_end, body_line })
 }
 
 fn find_subslice(haystack: &[u8], needle: &[u8]) -> Option<usize> {
@@ -235,10 +185,7 @@ impl ValueSource for BinarySource<'_> {
     fn next_value(&mut self, kind: Scalar) -> Result<f64, String> {
         let size = kind.size();
         let Some(raw) = self.bytes.get(self.offset..self.offset + size) else {
-            return Err(format!(
-                "file ends at byte {} in the middle of the data (truncated)",
-                self.bytes.len()
-            ));
+            return Err(format!("file ends at byte {} in the middle of the data (truncated)", self.bytes.len()));
         };
         self.offset += size;
         let mut buf = [0u8; 8];
@@ -267,10 +214,7 @@ struct AsciiSource<'a> {
 
 impl AsciiSource<'_> {
     fn line(&self) -> usize {
-        self.current
-            .as_ref()
-            .map(|(l, _)| self.first_line + l)
-            .unwrap_or(self.first_line)
+        self.current.as_ref().map(|(l, _)| self.first_line + l).unwrap_or(self.first_line)
     }
 }
 
@@ -279,14 +223,10 @@ impl ValueSource for AsciiSource<'_> {
         loop {
             if self.current.is_none() {
                 match self.lines.next() {
-                    Some((i, l)) if !l.trim().is_empty() => {
-                        self.current = Some((i, l.split_ascii_whitespace()))
-                    }
+                    Some((i, l)) if !l.trim().is_empty() => self.current = Some((i, l.split_ascii_whitespace())),
                     Some(_) => continue,
                     None => {
-                        return Err(
-                            "file ends before all declared elements were read (truncated)".into(),
-                        );
+                        return Err("file ends before all declared elements were read (truncated)".into());
                     }
                 }
             }
@@ -295,9 +235,7 @@ impl ValueSource for AsciiSource<'_> {
             let Some(token) = tokens.next() else {
                 return Err(format!("line {line} has too few values"));
             };
-            let value: f64 = token
-                .parse()
-                .map_err(|_| format!("line {line}: '{token}' is not a number"))?;
+            let value: f64 = token.parse().map_err(|_| format!("line {line}: '{token}' is not a number"))?;
             if kind.is_integer() && value.fract() != 0.0 {
                 return Err(format!("line {line}: '{token}' should be an integer"));
             }
@@ -312,9 +250,7 @@ impl ValueSource for AsciiSource<'_> {
         if let Some((_, mut tokens)) = self.current.take()
             && let Some(extra) = tokens.next()
         {
-            return Err(format!(
-                "line {line} has an unexpected extra value '{extra}'"
-            ));
+            return Err(format!("line {line} has an unexpected extra value '{extra}'"));
         }
         Ok(())
     }
@@ -352,24 +288,12 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
 
     let mut source: Box<dyn ValueSource> = match header.encoding {
         Encoding::Ascii => {
-            let text = std::str::from_utf8(body)
-                .map_err(|_| MeshError::parse(path, "body", "ascii PLY body is not text"))?;
-            Box::new(AsciiSource {
-                lines: text.lines().enumerate(),
-                first_line: header.body_line,
-                current: None,
-            })
+            let text =
+                std::str::from_utf8(body).map_err(|_| MeshError::parse(path, "body", "ascii PLY body is not text"))?;
+            Box::new(AsciiSource { lines: text.lines().enumerate(), first_line: header.body_line, current: None })
         }
-        Encoding::LittleEndian => Box::new(BinarySource {
-            bytes: body,
-            offset: 0,
-            big_endian: false,
-        }),
-        Encoding::BigEndian => Box::new(BinarySource {
-            bytes: body,
-            offset: 0,
-            big_endian: true,
-        }),
+        Encoding::LittleEndian => Box::new(BinarySource { bytes: body, offset: 0, big_endian: false }),
+        Encoding::BigEndian => Box::new(BinarySource { bytes: body, offset: 0, big_endian: true }),
     };
 
     let mut positions: Vec<[f32; 3]> = Vec::new();
@@ -393,11 +317,7 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
                 }
             }
             if xyz_slots.contains(&usize::MAX) {
-                return Err(MeshError::parse(
-                    path,
-                    "header",
-                    "vertex element lacks scalar x, y and z properties",
-                ));
+                return Err(MeshError::parse(path, "header", "vertex element lacks scalar x, y and z properties"));
             }
             positions.reserve(element.count as usize);
         }
@@ -405,13 +325,10 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
             let by_name = element.properties.iter().position(
                 |p| matches!(p, Property::List { name, .. } if name == "vertex_indices" || name == "vertex_index"),
             );
-            let any_list = element
-                .properties
-                .iter()
-                .position(|p| matches!(p, Property::List { .. }));
-            let slot = by_name.or(any_list).ok_or_else(|| {
-                MeshError::parse(path, "header", "face element has no list of vertex indices")
-            })?;
+            let any_list = element.properties.iter().position(|p| matches!(p, Property::List { .. }));
+            let slot = by_name
+                .or(any_list)
+                .ok_or_else(|| MeshError::parse(path, "header", "face element has no list of vertex indices"))?;
             face_list_seen = true;
             Some(slot)
         } else {
@@ -424,29 +341,19 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
             for (k, property) in element.properties.iter().enumerate() {
                 match property {
                     Property::Scalar { kind, .. } => {
-                        let v = source
-                            .next_value(*kind)
-                            .map_err(|r| MeshError::parse(path, loc(i), r))?;
+                        let v = source.next_value(*kind).map_err(|r| MeshError::parse(path, loc(i), r))?;
                         if let Some(axis) = xyz_slots.iter().position(|&s| s == k) {
                             xyz[axis] = v;
                         }
                     }
                     Property::List { count, item, .. } => {
-                        let n = source
-                            .next_value(*count)
-                            .map_err(|r| MeshError::parse(path, loc(i), r))?;
+                        let n = source.next_value(*count).map_err(|r| MeshError::parse(path, loc(i), r))?;
                         if n < 0.0 {
-                            return Err(MeshError::parse(
-                                path,
-                                loc(i),
-                                format!("negative list length {n}"),
-                            ));
+                            return Err(MeshError::parse(path, loc(i), format!("negative list length {n}")));
                         }
                         let keep = index_list == Some(k);
                         for _ in 0..n as u64 {
-                            let v = source
-                                .next_value(*item)
-                                .map_err(|r| MeshError::parse(path, loc(i), r))?;
+                            let v = source.next_value(*item).map_err(|r| MeshError::parse(path, loc(i), r))?;
                             if keep {
                                 indices.push(v as i64);
                             }
@@ -454,17 +361,11 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
                     }
                 }
             }
-            source
-                .end_element()
-                .map_err(|r| MeshError::parse(path, loc(i), r))?;
+            source.end_element().map_err(|r| MeshError::parse(path, loc(i), r))?;
             if is_vertex {
                 let p = [xyz[0] as f32, xyz[1] as f32, xyz[2] as f32];
                 if p.iter().any(|c| !c.is_finite()) {
-                    return Err(MeshError::parse(
-                        path,
-                        loc(i),
-                        format!("non-finite coordinate {xyz:?}"),
-                    ));
+                    return Err(MeshError::parse(path, loc(i), format!("non-finite coordinate {xyz:?}")));
                 }
                 positions.push(p);
             } else if is_face {
@@ -472,10 +373,7 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
                     return Err(MeshError::parse(
                         path,
                         loc(i),
-                        format!(
-                            "face has {} corners; a face needs at least 3",
-                            indices.len()
-                        ),
+                        format!("face has {} corners; a face needs at least 3", indices.len()),
                     ));
                 }
                 polygons.push((i as usize, indices));
@@ -495,10 +393,7 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
     let mut local = Vec::new();
     let mut points = Vec::new();
     for (face, indices) in &polygons {
-        if let Some(&bad) = indices
-            .iter()
-            .find(|&&v| v < 0 || v as usize >= vertex_count)
-        {
+        if let Some(&bad) = indices.iter().find(|&&v| v < 0 || v as usize >= vertex_count) {
             return Err(MeshError::parse(
                 path,
                 format!("face {face}"),
@@ -517,13 +412,7 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
             triangulate_polygon(&points, &mut local);
         }
         limits.check_faces((triangles.len() + local.len()) as u64)?;
-        triangles.extend(local.iter().map(|t| {
-            [
-                indices[t[0]] as u32,
-                indices[t[1]] as u32,
-                indices[t[2]] as u32,
-            ]
-        }));
+        triangles.extend(local.iter().map(|t| [indices[t[0]] as u32, indices[t[1]] as u32, indices[t[2]] as u32]));
     }
     Mesh::new(positions, triangles)
 }

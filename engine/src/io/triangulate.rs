@@ -21,11 +21,7 @@ pub(crate) fn triangulate_polygon(points: &[DVec3], out: &mut Vec<[usize; 3]>) {
     let mut normal = DVec3::ZERO;
     for i in 0..n {
         let (a, b) = (points[i], points[(i + 1) % n]);
-        normal += DVec3::new(
-            (a.y - b.y) * (a.z + b.z),
-            (a.z - b.z) * (a.x + b.x),
-            (a.x - b.x) * (a.y + b.y),
-        );
+        normal += DVec3::new((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y));
     }
     if normal.length_squared() == 0.0 {
         fan(&(0..n).collect::<Vec<_>>(), out);
@@ -34,29 +30,18 @@ pub(crate) fn triangulate_polygon(points: &[DVec3], out: &mut Vec<[usize; 3]>) {
     let normal = normal.normalize();
     let u = normal.any_orthonormal_vector();
     let v = normal.cross(u);
-    let flat: Vec<DVec2> = points
-        .iter()
-        .map(|p| DVec2::new(p.dot(u), p.dot(v)))
-        .collect();
+    let flat: Vec<DVec2> = points.iter().map(|p| DVec2::new(p.dot(u), p.dot(v))).collect();
 
     let mut remaining: Vec<usize> = (0..n).collect();
     while remaining.len() > 3 {
         let m = remaining.len();
         let ear = (0..m).find(|&i| {
-            let (a, b, c) = (
-                remaining[(i + m - 1) % m],
-                remaining[i],
-                remaining[(i + 1) % m],
-            );
+            let (a, b, c) = (remaining[(i + m - 1) % m], remaining[i], remaining[(i + 1) % m]);
             is_ear(&flat, a, b, c, &remaining)
         });
         match ear {
             Some(i) => {
-                out.push([
-                    remaining[(i + m - 1) % m],
-                    remaining[i],
-                    remaining[(i + 1) % m],
-                ]);
+                out.push([remaining[(i + m - 1) % m], remaining[i], remaining[(i + 1) % m]]);
                 remaining.remove(i);
             }
             None => break,
@@ -80,13 +65,10 @@ fn is_ear(flat: &[DVec2], a: usize, b: usize, c: usize, remaining: &[usize]) -> 
     if cross(pa, pb, pc) <= 0.0 {
         return false; // reflex or degenerate corner
     }
-    remaining
-        .iter()
-        .filter(|&&i| i != a && i != b && i != c)
-        .all(|&i| {
-            let p = flat[i];
-            !(cross(pa, pb, p) >= 0.0 && cross(pb, pc, p) >= 0.0 && cross(pc, pa, p) >= 0.0)
-        })
+    remaining.iter().filter(|&&i| i != a && i != b && i != c).all(|&i| {
+        let p = flat[i];
+        !(cross(pa, pb, p) >= 0.0 && cross(pb, pc, p) >= 0.0 && cross(pc, pa, p) >= 0.0)
+    })
 }
 
 #[cfg(test)]
@@ -103,10 +85,7 @@ mod tests {
         let mut tris = Vec::new();
         triangulate_polygon(&pts, &mut tris);
         assert_eq!(tris.len(), 4);
-        let area: f64 = tris
-            .iter()
-            .map(|t| 0.5 * (pts[t[1]] - pts[t[0]]).cross(pts[t[2]] - pts[t[0]]).z)
-            .sum();
+        let area: f64 = tris.iter().map(|t| 0.5 * (pts[t[1]] - pts[t[0]]).cross(pts[t[2]] - pts[t[0]]).z).sum();
         assert!((area - 3.0).abs() < 1e-12, "area {area}");
         for t in &tris {
             let z = (pts[t[1]] - pts[t[0]]).cross(pts[t[2]] - pts[t[0]]).z;

@@ -1,0 +1,279 @@
+//! Readers and writers: round trips, every refusal case with its error, real files.
+
+use std::path::Path;
+
+use meshlod_engine::io::{MeshFormat, ReadLimits, read_mesh, read_mesh_bytes, write_mesh, write_mesh_to};
+use meshlod_engine::{Mesh, MeshError, procedural};
+
+fn obj(text: &str) -> Result<Mesh, MeshError> {
+    read_mesh_bytes(text.as_bytes(), Some(MeshFormat::Obj), Path::new("test.obj"), &ReadLimits::default())
+}
+
+fn ply(bytes: &[u8]) -> Result<Mesh, MeshError> {
+    read_mesh_bytes(bytes, Some(MeshFormat::Ply), Path::new("test.ply"), &ReadLimits::default())
+}
+
+/// Asserts a parse error at `location` whose reason contains `needle`.
+fn assert_parse_error(result: Result<Mesh, MeshError>, location: &str, needle: &str) {
+    match result {
+        Err(MeshError::Parse { location: loc, reason, path }) => {
+            assert_eq!(loc, location, "reason was: {reason}");
+            assert!(reason.contains(needle), "reason '{reason}' lacks '{needle}'");
+            assert!(path.to_string_lossy().starts_with("test."), "error must name the file");
+        }
+        other => panic!("expected parse error at {location}, got {other:?}"),
+    }
+}
+
+const SQUARE_OBJ: &str = "# square\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+
+#[test]
+fn obj_reads_polygons_negative_indices_and_corner_attributes() {
+    let m = obj(SQUARE_OBJ).unwrap();
+    assert_eq!(m.vertex_count(), 4);
+    assert_eq!(m.face_count(), 2);
+    let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\nf -3/1/1 -2/2/1 -1/3/1\n";
+    let m = obj(text).unwrap();
+    assert_eq!(m.triangles, vec![[0, 1, 2]]);
+    assert_eq!(m.corners.uvs.as_ref().unwrap()[2], [1.0, 1.0]);
+    assert_eq!(m.corners.normals.as_ref().unwrap().len(), 3);
+    // Unreferenced vertices keep their place: the file's numbering is the mesh's numbering.
+    let m = obj("v 9 9 9\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 2 3 4\n").unwrap();
+    assert_eq!(m.vertex_count(), 4);
+    assert_eq!(m.triangles, vec![[1, 2, 3]]);
+}
+
+#[test]
+fn obj_refusals_name_the_line() {
+    assert_parse_error(obj("v 0 0 0\nv nan 0 0\n"), "line 2", "non-finite");
+    assert_parse_error(obj("v 0 0 inf\n"), "line 1", "non-finite");
+    assert_parse_error(obj("v 0 0\n"), "line 1", "needs 3 numbers");
+    assert_parse_error(obj("v 0 zero 0\n"), "line 1", "not a number");
+    assert_parse_error(obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99\n"), "line 4", "vertex 99");
+    assert_parse_error(obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"), "line 4", "index 0");
+    assert_parse_error(obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n"), "line 4", "before the first");
+    assert_parse_error(obj("v 0 0 0\nv 1 0 0\nf 1 2\n"), "line 3", "at least 3");
+    assert_parse_error(obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/4 2/4 3/4\nvt 0 0\n"), "line 4", "texture coordinate 4");
+    let binary = [0xffu8, 0xfe, 0x00, b'\n'];
+    assert!(matches!(
+        read_mesh_bytes(&binary, Some(MeshFormat::Obj), Path::new("test.obj"), &ReadLimits::default()),
+        Err(MeshError::Parse { .. })
+    ));
+}
+
+#[test]
+fn obj_limits_are_enforced() {
+    let limits = ReadLimits { max_vertices: 3, max_faces: 1 };
+    let r = read_mesh_bytes(SQUARE_OBJ.as_bytes(), Some(MeshFormat::Obj), Path::new("t.obj"), &limits);
+    assert!(matches!(r, Err(MeshError::TooLarge { what: "vertices", count: 4, limit: 3 })), "{r:?}");
+    let limits = ReadLimits { max_vertices: 10, max_faces: 1 };
+    let r = read_mesh_bytes(SQUARE_OBJ.as_bytes(), Some(MeshFormat::Obj), Path::new("t.obj"), &limits);
+    assert!(matches!(r, Err(MeshError::TooLarge { what: "faces", .. })), "{r:?}");
+}
+
+fn ply_header(format: &str, vertex_props: &str, vertices: u64, face_prop: &str, faces: u64) -> Vec<u8> {
+    format!(
+        "ply\nformat {format} 1.0\ncomment test\nelement vertex {vertices}\n{vertex_props}element face {faces}\n{face_prop}end_header\n"
+    )
+    .into_bytes()
+}
+
+#[test]
+fn ply_ascii_with_extra_properties_elements_and_polygons() {
+    let mut bytes = ply_header(
+        "ascii",
+        "property float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty list uchar int extra\n",
+        4,
+        "property list uchar int vertex_indices\nproperty float quality\n",
+        1,
+    );
+    bytes.extend_from_slice(b"0 0 0 255 0\n1 0 0 255 2 7 8\n1 1 0 0 0\n0 1 0 1 1 5\n4 0 1 2 3 0.5\n");
+    let m = ply(&bytes).unwrap();
+    assert_eq!(m.vertex_count(), 4);
+    assert_eq!(m.face_count(), 2);
+    assert_eq!(m.positions[2], [1.0, 1.0, 0.0]);
+}
+
+fn binary_triangle(big_endian: bool, double: bool, count_type: &str) -> Vec<u8> {
+    let format = if big_endian { "binary_big_endian" } else { "binary_little_endian" };
+    let ty = if double { "double" } else { "float" };
+    let mut bytes = ply_header(
+        format,
+        &format!("property {ty} x\nproperty {ty} y\nproperty {ty} z\nproperty short flags\n"),
+        3,
+        &format!("property list {count_type} uint vertex_indices\n"),
+        1,
+    );
+    let coords: [[f64; 3]; 3] = [[0.0, 0.0, 0.0], [1.5, 0.0, 0.0], [0.0, 2.25, -1.0]];
+    for c in coords {
+        for x in c {
+            let raw = if double { x.to_le_bytes().to_vec() } else { (x as f32).to_le_bytes().to_vec() };
+            bytes.extend(if big_endian { raw.into_iter().rev().collect() } else { raw });
+        }
+        bytes.extend([0u8, 0]);
+    }
+    let count: Vec<u8> = match count_type {
+        "uchar" => vec![3],
+        _ if big_endian => 3i32.to_be_bytes().to_vec(),
+        _ => 3i32.to_le_bytes().to_vec(),
+    };
+    bytes.extend(count);
+    for i in [0u32, 1, 2] {
+        bytes.extend(if big_endian { i.to_be_bytes() } else { i.to_le_bytes() });
+    }
+    bytes
+}
+
+#[test]
+fn ply_binary_endianness_types_and_count_widths() {
+    for big in [false, true] {
+        for double in [false, true] {
+            for count in ["uchar", "int"] {
+                let m =
+                    ply(&binary_triangle(big, double, count)).unwrap_or_else(|e| panic!("{big} {double} {count}: {e}"));
+                assert_eq!(m.positions, vec![[0.0, 0.0, 0.0], [1.5, 0.0, 0.0], [0.0, 2.25, -1.0]]);
+                assert_eq!(m.triangles, vec![[0, 1, 2]]);
+            }
+        }
+    }
+}
+
+#[test]
+fn ply_refusals() {
+    // Truncated binary data.
+    let full = binary_triangle(false, false, "uchar");
+    assert!(matches!(ply(&full[..full.len() - 5]), Err(MeshError::Parse { .. })));
+    // A header that claims more data than follows is refused before anything is allocated.
+    let mut lying = ply_header(
+        "binary_little_endian",
+        "property float x\nproperty float y\nproperty float z\n",
+        1_000_000,
+        "property list uchar int vertex_indices\n",
+        1,
+    );
+    lying.extend([0u8; 64]);
+    assert_parse_error(ply(&lying), "header", "only 64 follow");
+    // An absurd count hits the configured limit.
+    let absurd = ply_header(
+        "ascii",
+        "property float x\nproperty float y\nproperty float z\n",
+        1_000_000_000_000,
+        "property list uchar int vertex_indices\n",
+        0,
+    );
+    assert!(matches!(ply(&absurd), Err(MeshError::TooLarge { what: "vertices", .. })));
+    // Index out of range.
+    let mut bad_index = ply_header(
+        "ascii",
+        "property float x\nproperty float y\nproperty float z\n",
+        3,
+        "property list uchar int vertex_indices\n",
+        1,
+    );
+    bad_index.extend_from_slice(b"0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n");
+    assert_parse_error(ply(&bad_index), "face 0", "vertex 3");
+    // Negative index.
+    let mut negative = ply_header(
+        "ascii",
+        "property float x\nproperty float y\nproperty float z\n",
+        3,
+        "property list uchar int vertex_indices\n",
+        1,
+    );
+    negative.extend_from_slice(b"0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n");
+    assert_parse_error(ply(&negative), "face 0", "vertex -1");
+    // NaN coordinate.
+    let mut nan = ply_header(
+        "ascii",
+        "property float x\nproperty float y\nproperty float z\n",
+        3,
+        "property list uchar int vertex_indices\n",
+        1,
+    );
+    nan.extend_from_slice(b"0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n");
+    assert_parse_error(ply(&nan), "vertex 1", "non-finite");
+    // Ascii data shorter than the header says.
+    let mut short = ply_header(
+        "ascii",
+        "property float x\nproperty float y\nproperty float z\n",
+        3,
+        "property list uchar int vertex_indices\n",
+        1,
+    );
+    short.extend_from_slice(b"0 0 0\n1 0 0\n0 1 0\n3 0 1\n");
+    assert_parse_error(ply(&short), "face 0", "too few values");
+    // Header problems.
+    assert_parse_error(ply(b"ply\nformat ascii 1.0\nelement vertex 0\n"), "header", "end_header");
+    assert_parse_error(ply(b"ply\nformat fancy 1.0\nend_header\n"), "line 2", "unknown format");
+    assert_parse_error(
+        ply(b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n"),
+        "header",
+        "x, y and z",
+    );
+    assert_parse_error(ply(b"ply\nformat ascii 1.0\nelement vertex -5\nend_header\n"), "line 3", "non-negative");
+    assert_parse_error(ply(b"plx\nformat ascii 1.0\nend_header\n"), "line 1", "magic");
+}
+
+#[test]
+fn round_trips_are_exact() {
+    let dir = tempdir("round_trips_are_exact");
+    let mesh = procedural::bumpy_blob(20, 40, 3);
+    for ext in ["obj", "ply"] {
+        let path = dir.join(format!("blob.{ext}"));
+        write_mesh(&path, &mesh).unwrap();
+        let back = read_mesh(&path).unwrap();
+        assert_eq!(back.positions, mesh.positions, "{ext}: positions must be bit-exact");
+        assert_eq!(back.triangles, mesh.triangles, "{ext}");
+    }
+    // Content sniffing when the extension says nothing.
+    let mut bytes = Vec::new();
+    write_mesh_to(&mut bytes, &mesh, MeshFormat::Ply).unwrap();
+    let odd = dir.join("blob.mesh");
+    std::fs::write(&odd, &bytes).unwrap();
+    assert_eq!(read_mesh(&odd).unwrap().triangles, mesh.triangles);
+    // Unknown output extension and missing input file are clear errors.
+    assert!(matches!(write_mesh(dir.join("x.stl"), &mesh), Err(MeshError::UnsupportedFormat { .. })));
+    let missing = read_mesh(dir.join("missing.obj")).unwrap_err();
+    assert!(missing.to_string().contains("missing.obj"), "{missing}");
+}
+
+#[test]
+fn shared_meshes_load_with_known_counts() {
+    let Some(dir) = meshlod_engine::datasets::require_shared_meshes("shared_meshes_load_with_known_counts") else {
+        return;
+    };
+    // (name, vertices, polygons in the file); triangulated meshes have at least as many faces.
+    let expected = [
+        ("cow", 2903, 5804),
+        ("stanford-bunny", 35947, 69451),
+        ("spot", 2930, 5856),
+        ("fandisk", 6475, 12946),
+        ("homer", 6002, 12000),
+        ("rocker-arm", 10044, 20088),
+        ("teapot", 3644, 6320),
+        ("nefertiti", 49971, 99938),
+        ("ogre", 62194, 124008),
+        ("beetle", 1148, 2053),
+        ("suzanne", 507, 500),
+    ];
+    for (name, vertices, polygons) in expected {
+        let mesh = read_mesh(dir.join(format!("{name}.obj"))).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(mesh.vertex_count(), vertices, "{name} vertices");
+        if name == "suzanne" {
+            assert!(mesh.face_count() > polygons, "{name}: quads must be triangulated");
+        } else if name == "beetle" {
+            assert!(mesh.face_count() >= polygons, "{name}: polygons must be triangulated");
+        } else {
+            assert_eq!(mesh.face_count(), polygons, "{name} faces");
+        }
+    }
+    // spot has texture coordinates: kept per corner, geometry still welded.
+    let spot = read_mesh(dir.join("spot.obj")).unwrap();
+    assert_eq!(spot.corners.uvs.as_ref().map(Vec::len), Some(3 * spot.face_count()));
+}
+
+fn tempdir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("meshlod-test-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
