@@ -9,7 +9,8 @@
 //! | samples   | where                                                                  |
 //! |-----------|------------------------------------------------------------------------|
 //! | vertices  | every vertex some face uses (unreferenced vertices are not surface)     |
-//! | edges     | `n` points spread evenly along the total length of the unique edges    |
+//! | edges     | `n` points spread along the unique edges by length; an edge with k     |
+//! |           | samples is split into k + 1 equal parts                                 |
 //! | faces     | `n` points, area-weighted: each face gets its share (carried over), at  |
 //! |           | uniformly random barycentric positions                                  |
 //!
@@ -180,8 +181,9 @@ pub fn sample_surface(mesh: &Mesh, n: usize, options: &HausdorffOptions) -> Vec<
                 let k = carry.floor();
                 carry -= k;
                 let (pa, pb) = (mesh.point(a), mesh.point(b));
-                for i in 0..k as usize {
-                    let t = (i as f64 + 0.5) / k;
+                // Metro's placement: k samples splitting the edge into k + 1 equal parts.
+                for i in 1..=k as usize {
+                    let t = i as f64 / (k + 1.0);
                     samples.push(pa + (pb - pa) * t);
                 }
             }

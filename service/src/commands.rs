@@ -51,6 +51,15 @@ enum Command {
         /// Seed of the face sampler.
         #[arg(long, default_value_t = HausdorffOptions::default().seed)]
         seed: u64,
+        /// Do not sample vertices.
+        #[arg(long)]
+        no_vertex_samples: bool,
+        /// Do not sample edges.
+        #[arg(long)]
+        no_edge_samples: bool,
+        /// Do not sample faces.
+        #[arg(long)]
+        no_face_samples: bool,
         /// Print one JSON object instead of text.
         #[arg(long)]
         json: bool,
@@ -123,13 +132,19 @@ pub fn run(cli: Cli) -> Result<()> {
             }
             write_mesh(&output, &mesh)?;
         }
-        Command::Hausdorff { a, b, samples, seed, json } => {
+        Command::Hausdorff { a, b, samples, seed, no_vertex_samples, no_edge_samples, no_face_samples, json } => {
             if samples == Some(0) {
                 bail!("--samples must be at least 1");
             }
             let (mesh_a, mesh_b) = (load(&a)?, load(&b)?);
             let started = Instant::now();
-            let options = HausdorffOptions { samples, seed, ..Default::default() };
+            let options = HausdorffOptions {
+                samples,
+                seed,
+                sample_vertices: !no_vertex_samples,
+                sample_edges: !no_edge_samples,
+                sample_faces: !no_face_samples,
+            };
             let report = hausdorff(&mesh_a, &mesh_b, &options)?;
             let seconds = started.elapsed().as_secs_f64();
             if json {
