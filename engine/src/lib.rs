@@ -11,8 +11,12 @@ pub mod error;
 pub mod hausdorff;
 pub mod io;
 pub mod mesh;
+pub mod pm;
+pub mod pm_format;
 pub mod procedural;
+pub mod quadric;
 mod rng;
+pub mod simplify;
 pub mod topology;
 pub mod validate;
 

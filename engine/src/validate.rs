@@ -172,32 +172,76 @@ pub(crate) fn fan_count(mesh: &Mesh, topology: &Topology, v: u32) -> usize {
     roots.len()
 }
 
-/// Counts closed walks over boundary half-edges (each taken in its face's direction).
+/// Counts boundary loops: closed walks over boundary half-edges (each in its face's direction).
+///
+/// At a vertex where several boundary loops touch (a pinched, non-manifold vertex) the walk leaves
+/// through the boundary half-edge of the same fan as the one it arrived by, found by turning around
+/// the vertex through its faces, so the count does not depend on the order of the edge table.
 fn count_boundary_loops(mesh: &Mesh, topology: &Topology) -> usize {
-    let mut outgoing: HashMap<u32, Vec<u32>> = HashMap::new();
+    let tris = &mesh.triangles;
+    // Boundary half-edges: (face, corner) with edge t[corner] → t[corner + 1].
+    let mut outgoing: HashMap<u32, Vec<(u32, u8)>> = HashMap::new();
+    let mut used: HashMap<(u32, u8), bool> = HashMap::new();
     for (e, _) in topology.edges.iter().enumerate() {
         let faces = topology.edge_faces.get(e);
         if faces.len() != 1 {
             continue;
         }
-        let f = faces[0].index();
-        let corner = topology.face_edges[f].iter().position(|&x| x == e as u32).expect("edge belongs to its face");
-        let t = mesh.triangles[f];
-        outgoing.entry(t[corner]).or_default().push(t[(corner + 1) % 3]);
+        let f = faces[0].0;
+        let corner = topology.face_edges[f as usize].iter().position(|&x| x == e as u32).expect("edge of its face");
+        outgoing.entry(tris[f as usize][corner]).or_default().push((f, corner as u8));
+        used.insert((f, corner as u8), false);
     }
-    let mut loops = 0;
-    let mut starts: Vec<u32> = outgoing.keys().copied().collect();
-    starts.sort_unstable();
-    for start in starts {
-        while let Some(mut at) = outgoing.get_mut(&start).and_then(|v| v.pop()) {
-            loops += 1;
-            // Follow the chain until it returns to `start` or runs out (an open chain on an
-            // inconsistently oriented border still counts as one loop).
-            while at != start {
-                match outgoing.get_mut(&at).and_then(|v| v.pop()) {
-                    Some(next) => at = next,
-                    None => break,
+    // From the boundary half-edge (f, c) ending at v, turn around v through faces until the next
+    // boundary half-edge leaving v.
+    let next_in_fan = |f: u32, c: u8| -> Option<(u32, u8)> {
+        let (mut face, mut corner) = (f, (c as usize + 1) % 3); // corner of v in face
+        for _ in 0..tris.len() {
+            let t = tris[face as usize];
+            let e = topology.face_edges[face as usize][corner];
+            if e == NO_EDGE {
+                return None;
+            }
+            let faces = topology.edge_faces.get(e as usize);
+            match faces.len() {
+                1 => return Some((face, corner as u8)),
+                2 => {
+                    let other = if faces[0].0 == face { faces[1].0 } else { faces[0].0 };
+                    let v = t[corner];
+                    let w = t[(corner + 1) % 3];
+                    // In the other face the edge runs w → v; continue at v's corner there, whose
+                    // outgoing edge is the next one around v.
+                    let u = tris[other as usize];
+                    let wc = u.iter().position(|&x| x == w)?;
+                    if u[(wc + 1) % 3] != v {
+                        return None; // inconsistent orientation: no well-defined turn
+                    }
+                    face = other;
+                    corner = (wc + 1) % 3;
                 }
+                _ => return None,
+            }
+        }
+        None
+    };
+    let mut starts: Vec<(u32, u8)> = used.keys().copied().collect();
+    starts.sort_unstable();
+    let mut loops = 0;
+    for start in starts {
+        if used[&start] {
+            continue;
+        }
+        loops += 1;
+        let mut at = start;
+        loop {
+            used.insert(at, true);
+            let v = tris[at.0 as usize][(at.1 as usize + 1) % 3];
+            let next = next_in_fan(at.0, at.1)
+                .filter(|n| !used[n])
+                .or_else(|| outgoing.get(&v).and_then(|list| list.iter().copied().find(|n| !used[n])));
+            match next {
+                Some(n) => at = n,
+                None => break,
             }
         }
     }

@@ -1,0 +1,427 @@
+//! Progressive meshes: a base mesh M0 plus an ordered list of vertex splits (Hoppe 1996).
+//!
+//! Numbering: M0 uses vertices `0..n0` and faces `0..f0`; split `j` (0-based) adds vertex
+//! `n0 + j` and its one or two faces right after the faces of level `j`. So the mesh at level `l`
+//! is always a prefix: the first `n0 + l` vertices and the first `face_counts[l]` faces.
+//!
+//! A split re-creates vertex `vt` next to `vs`:
+//! ```text
+//!          vl                        vl
+//!          |                        /  \
+//!          |                       /    \
+//!   ...---vs---...     ==>  ...---vs----vt---...
+//!          |                       \    /
+//!          |                        \  /
+//!          vr                        vr
+//! ```
+//! The faces around `vs` from the one with half-edge `vs→vr` counter-clockwise to the one whose
+//! last corner is `vl` move to `vt`; the faces `(vs, vt, vl)` and `(vt, vs, vr)` are added (either
+//! may be absent on a boundary). `vs` returns to its position before the collapse, `vt` gets its
+//! own. Positions are stored as the input's `f32` values, so refining all the way gives back the
+//! input bit for bit.
+
+use serde::Serialize;
+
+use crate::error::MeshError;
+use crate::mesh::Mesh;
+
+/// Marks an absent `vl` or `vr` (the collapsed edge was on a boundary).
+pub const NO_VERTEX: u32 = u32::MAX;
+
+/// One edge collapse as the simplifier logs it (indices of the simplifier's prepared mesh).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct CollapseRecord {
+    pub survivor: u32,
+    pub removed: u32,
+    pub left: u32,
+    pub right: u32,
+    pub left_face: u32,
+    pub right_face: u32,
+    pub survivor_position: [f32; 3],
+    pub removed_position: [f32; 3],
+    pub collapsed_position: [f32; 3],
+    pub error: f32,
+}
+
+/// One vertex split (the inverse of one edge collapse).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct VertexSplit {
+    /// The vertex that splits.
+    pub vs: u32,
+    /// Third vertex of the added face `(vs, vt, vl)`, or [`NO_VERTEX`].
+    pub vl: u32,
+    /// Third vertex of the added face `(vt, vs, vr)`, or [`NO_VERTEX`].
+    pub vr: u32,
+    /// Position of the new vertex `vt`.
+    pub new_position: [f32; 3],
+    /// Position of `vs` after the split.
+    pub split_position: [f32; 3],
+    /// Position of `vs` before the split (where the collapse had put it).
+    pub collapsed_position: [f32; 3],
+    /// Largest collapse error estimate up to and including this split's collapse, paper units of
+    /// the original mesh. Non-increasing along the split order: refine until it drops below a
+    /// tolerance to stop at an error rather than at a count.
+    pub error: f32,
+}
+
+impl VertexSplit {
+    /// Whether the split moves `vs` (false for endpoint placement).
+    pub fn moves_vs(&self) -> bool {
+        self.split_position.map(f32::to_bits) != self.collapsed_position.map(f32::to_bits)
+    }
+
+    /// Number of faces the split adds.
+    pub fn added_faces(&self) -> usize {
+        (self.vl != NO_VERTEX) as usize + (self.vr != NO_VERTEX) as usize
+    }
+}
+
+/// A base mesh and the vertex splits that refine it back to the original.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProgressiveMesh {
+    base: Mesh,
+    splits: Vec<VertexSplit>,
+    /// Faces at each level `0..=splits.len()`.
+    face_counts: Vec<u32>,
+    /// Input vertex of each vertex (when built by the simplifier).
+    input_vertex: Option<Vec<u32>>,
+}
+
+impl ProgressiveMesh {
+    /// Builds the progressive mesh from the simplifier's collapse log.
+    pub(crate) fn from_log(
+        prepared: &Mesh,
+        input_vertex: &[u32],
+        final_positions: &[[f32; 3]],
+        final_triangles: &[[u32; 3]],
+        face_alive: &[bool],
+        log: &[CollapseRecord],
+    ) -> ProgressiveMesh {
+        let n = prepared.vertex_count();
+        let mut removed = vec![false; n];
+        for r in log {
+            removed[r.removed as usize] = true;
+        }
+        let mut vertex_map = vec![NO_VERTEX; n];
+        let mut order: Vec<u32> = Vec::with_capacity(n);
+        for v in 0..n {
+            if !removed[v] {
+                vertex_map[v] = order.len() as u32;
+                order.push(v as u32);
+            }
+        }
+        let base_vertices = order.len();
+        for r in log.iter().rev() {
+            vertex_map[r.removed as usize] = order.len() as u32;
+            order.push(r.removed);
+        }
+        let map = |v: u32| if v == NO_VERTEX { NO_VERTEX } else { vertex_map[v as usize] };
+        let base_positions: Vec<[f32; 3]> =
+            order[..base_vertices].iter().map(|&v| final_positions[v as usize]).collect();
+        let base_triangles: Vec<[u32; 3]> = (0..final_triangles.len())
+            .filter(|&f| face_alive[f])
+            .map(|f| final_triangles[f].map(|v| vertex_map[v as usize]))
+            .collect();
+        let mut face_counts = Vec::with_capacity(log.len() + 1);
+        face_counts.push(base_triangles.len() as u32);
+        let splits: Vec<VertexSplit> = log
+            .iter()
+            .rev()
+            .map(|r| {
+                let split = VertexSplit {
+                    vs: map(r.survivor),
+                    vl: map(r.left),
+                    vr: map(r.right),
+                    new_position: r.removed_position,
+                    split_position: r.survivor_position,
+                    collapsed_position: r.collapsed_position,
+                    error: r.error,
+                };
+                face_counts.push(face_counts.last().expect("non-empty") + split.added_faces() as u32);
+                split
+            })
+            .collect();
+        let input_vertex = order.iter().map(|&v| input_vertex[v as usize]).collect();
+        ProgressiveMesh {
+            base: Mesh { positions: base_positions, triangles: base_triangles, corners: Default::default() },
+            splits,
+            face_counts,
+            input_vertex: Some(input_vertex),
+        }
+    }
+
+    /// Assembles a progressive mesh from parts read elsewhere (a file, a stream), checking it by
+    /// replaying every split: a corrupt sequence is refused here, so later refinement cannot fail.
+    pub fn from_parts(base: Mesh, splits: Vec<VertexSplit>) -> Result<ProgressiveMesh, MeshError> {
+        base.check()?;
+        let mut face_counts = Vec::with_capacity(splits.len() + 1);
+        face_counts.push(base.face_count() as u32);
+        for s in &splits {
+            face_counts.push(face_counts.last().expect("non-empty") + s.added_faces() as u32);
+        }
+        let pm = ProgressiveMesh { base, splits, face_counts, input_vertex: None };
+        let mut cursor = LodCursor::new(&pm);
+        cursor.seek_level(pm.splits.len())?;
+        Ok(pm)
+    }
+
+    /// The coarsest mesh M0.
+    pub fn base(&self) -> &Mesh {
+        &self.base
+    }
+
+    /// The vertex splits, in refinement order.
+    pub fn splits(&self) -> &[VertexSplit] {
+        &self.splits
+    }
+
+    /// Number of levels above the base (= number of splits).
+    pub fn levels(&self) -> usize {
+        self.splits.len()
+    }
+
+    /// Faces of the mesh at `level` (0 = base).
+    pub fn faces_at_level(&self, level: usize) -> usize {
+        self.face_counts[level.min(self.splits.len())] as usize
+    }
+
+    /// Vertices of the mesh at `level`.
+    pub fn vertices_at_level(&self, level: usize) -> usize {
+        self.base.vertex_count() + level.min(self.splits.len())
+    }
+
+    /// For each vertex (in this numbering), its index in the mesh given to the simplifier; `None`
+    /// when read from a file.
+    pub fn input_vertex(&self) -> Option<&[u32]> {
+        self.input_vertex.as_deref()
+    }
+
+    /// The finest level whose face count does not exceed `faces` (the base if even it has more).
+    pub fn level_for_faces(&self, faces: usize) -> usize {
+        self.face_counts.partition_point(|&c| c as usize <= faces).saturating_sub(1)
+    }
+
+    /// The mesh with at most `faces` faces, as close to it as the levels allow.
+    pub fn at_faces(&self, faces: usize) -> Mesh {
+        self.at_level(self.level_for_faces(faces))
+    }
+
+    /// The mesh with `vertices` vertices (clamped to the base and the original).
+    pub fn at_vertices(&self, vertices: usize) -> Mesh {
+        self.at_level(vertices.saturating_sub(self.base.vertex_count()))
+    }
+
+    /// The mesh at `level` (clamped to the number of splits).
+    pub fn at_level(&self, level: usize) -> Mesh {
+        let mut cursor = LodCursor::new(self);
+        cursor.seek_level(level).expect("a ProgressiveMesh is validated when built");
+        cursor.mesh()
+    }
+
+    /// A cursor for moving between levels incrementally.
+    pub fn cursor(&self) -> LodCursor<'_> {
+        LodCursor::new(self)
+    }
+}
+
+/// The mesh at one level of a progressive mesh, moved up (splits) or down (collapses) one step at
+/// a time: going to a nearby level costs only the splits in between.
+#[derive(Debug, Clone)]
+pub struct LodCursor<'p> {
+    pm: &'p ProgressiveMesh,
+    level: usize,
+    positions: Vec<[f32; 3]>,
+    triangles: Vec<[u32; 3]>,
+    vertex_faces: Vec<Vec<u32>>,
+    moved: Vec<u32>,
+}
+
+/// `t` rotated so that `v` comes first.
+#[inline]
+fn rotate_to(t: [u32; 3], v: u32) -> [u32; 3] {
+    if t[0] == v {
+        t
+    } else if t[1] == v {
+        [t[1], t[2], t[0]]
+    } else {
+        [t[2], t[0], t[1]]
+    }
+}
+
+impl<'p> LodCursor<'p> {
+    /// A cursor at the base level.
+    pub fn new(pm: &'p ProgressiveMesh) -> Self {
+        let total_vertices = pm.base.vertex_count() + pm.splits.len();
+        let total_faces = *pm.face_counts.last().expect("non-empty") as usize;
+        let mut positions = Vec::with_capacity(total_vertices);
+        positions.extend_from_slice(&pm.base.positions);
+        positions.resize(total_vertices, [0.0; 3]);
+        let mut triangles = Vec::with_capacity(total_faces);
+        triangles.extend_from_slice(&pm.base.triangles);
+        triangles.resize(total_faces, [0; 3]);
+        let mut vertex_faces = vec![Vec::new(); total_vertices];
+        for (f, t) in pm.base.triangles.iter().enumerate() {
+            for &v in t {
+                vertex_faces[v as usize].push(f as u32);
+            }
+        }
+        LodCursor { pm, level: 0, positions, triangles, vertex_faces, moved: Vec::new() }
+    }
+
+    /// Current level.
+    pub fn level(&self) -> usize {
+        self.level
+    }
+
+    /// Faces at the current level.
+    pub fn face_count(&self) -> usize {
+        self.pm.face_counts[self.level] as usize
+    }
+
+    /// Vertices at the current level.
+    pub fn vertex_count(&self) -> usize {
+        self.pm.base.vertex_count() + self.level
+    }
+
+    /// A copy of the current mesh.
+    pub fn mesh(&self) -> Mesh {
+        Mesh {
+            positions: self.positions[..self.vertex_count()].to_vec(),
+            triangles: self.triangles[..self.face_count()].to_vec(),
+            corners: Default::default(),
+        }
+    }
+
+    /// Moves to `level` (clamped) by applying or undoing splits.
+    pub fn seek_level(&mut self, level: usize) -> Result<(), MeshError> {
+        let level = level.min(self.pm.splits.len());
+        while self.level < level {
+            self.refine()?;
+        }
+        while self.level > level {
+            self.coarsen();
+        }
+        Ok(())
+    }
+
+    /// Moves to the finest level with at most `faces` faces.
+    pub fn seek_faces(&mut self, faces: usize) -> Result<(), MeshError> {
+        self.seek_level(self.pm.level_for_faces(faces))
+    }
+
+    fn corrupt(&self, reason: String) -> MeshError {
+        MeshError::Parse { path: "<progressive mesh>".into(), location: format!("split {}", self.level), reason }
+    }
+
+    /// Face around `v` whose corners, rotated to start at `v`, satisfy `pred`.
+    fn find_face(&self, v: u32, pred: impl Fn([u32; 3]) -> bool) -> Option<u32> {
+        self.vertex_faces[v as usize].iter().copied().find(|&f| pred(rotate_to(self.triangles[f as usize], v)))
+    }
+
+    /// Applies the next split.
+    pub fn refine(&mut self) -> Result<(), MeshError> {
+        let Some(&s) = self.pm.splits.get(self.level) else { return Ok(()) };
+        let vt = self.vertex_count() as u32;
+        let valid = |v: u32| v == NO_VERTEX || v < vt;
+        if s.vs >= vt
+            || !valid(s.vl)
+            || !valid(s.vr)
+            || (s.vl == NO_VERTEX && s.vr == NO_VERTEX)
+            || s.vl == s.vs
+            || s.vr == s.vs
+            || (s.vl == s.vr)
+        {
+            return Err(self.corrupt(format!(
+                "vertex indices vs {} vl {} vr {} are invalid with {vt} vertices",
+                s.vs, s.vl, s.vr
+            )));
+        }
+        let vs = s.vs;
+        let limit = self.vertex_faces[vs as usize].len();
+        self.moved.clear();
+        // Faces from (vs, vr, ·) counter-clockwise to (vs, ·, vl) move to vt; with vr absent the
+        // chain runs clockwise from (vs, ·, vl) to the boundary.
+        // On a boundary edge the chain may be empty (vt was an ear with a single face).
+        if s.vr != NO_VERTEX {
+            let start = self.find_face(vs, |t| t[1] == s.vr);
+            let mut f = match start {
+                Some(f) => f,
+                None if s.vl == NO_VERTEX => NO_VERTEX,
+                None => return Err(self.corrupt("no face with edge vs→vr".into())),
+            };
+            while f != NO_VERTEX {
+                self.moved.push(f);
+                let z = rotate_to(self.triangles[f as usize], vs)[2];
+                if s.vl != NO_VERTEX && z == s.vl {
+                    break;
+                }
+                match self.find_face(vs, |t| t[1] == z) {
+                    Some(next) if self.moved.len() < limit => f = next,
+                    None if s.vl == NO_VERTEX => break,
+                    _ => return Err(self.corrupt("the fan of vs does not lead from vr to vl".into())),
+                }
+            }
+        } else {
+            let mut f = self.find_face(vs, |t| t[2] == s.vl).unwrap_or(NO_VERTEX);
+            while f != NO_VERTEX {
+                self.moved.push(f);
+                let y = rotate_to(self.triangles[f as usize], vs)[1];
+                match self.find_face(vs, |t| t[2] == y) {
+                    Some(prev) if self.moved.len() < limit => f = prev,
+                    None => break,
+                    _ => return Err(self.corrupt("the fan of vs does not end at a boundary".into())),
+                }
+            }
+        }
+        for i in 0..self.moved.len() {
+            let f = self.moved[i];
+            for corner in self.triangles[f as usize].iter_mut() {
+                if *corner == vs {
+                    *corner = vt;
+                }
+            }
+            self.vertex_faces[vs as usize].retain(|&g| g != f);
+            self.vertex_faces[vt as usize].push(f);
+        }
+        let mut next_face = self.face_count() as u32;
+        for (present, t) in [(s.vl != NO_VERTEX, [vs, vt, s.vl]), (s.vr != NO_VERTEX, [vt, vs, s.vr])] {
+            if present {
+                self.triangles[next_face as usize] = t;
+                for v in t {
+                    self.vertex_faces[v as usize].push(next_face);
+                }
+                next_face += 1;
+            }
+        }
+        self.positions[vs as usize] = s.split_position;
+        self.positions[vt as usize] = s.new_position;
+        self.level += 1;
+        Ok(())
+    }
+
+    /// Undoes the last split (an edge collapse).
+    pub fn coarsen(&mut self) {
+        if self.level == 0 {
+            return;
+        }
+        self.level -= 1;
+        let s = self.pm.splits[self.level];
+        let vt = self.vertex_count() as u32;
+        let (first, end) = (self.pm.face_counts[self.level], self.pm.face_counts[self.level + 1]);
+        for f in first..end {
+            for v in self.triangles[f as usize] {
+                self.vertex_faces[v as usize].retain(|&g| g != f);
+            }
+        }
+        let faces = std::mem::take(&mut self.vertex_faces[vt as usize]);
+        for &f in &faces {
+            for corner in self.triangles[f as usize].iter_mut() {
+                if *corner == vt {
+                    *corner = s.vs;
+                }
+            }
+        }
+        self.vertex_faces[s.vs as usize].extend(faces);
+        self.positions[s.vs as usize] = s.collapsed_position;
+    }
+}

@@ -1,0 +1,264 @@
+//! The `.pm` file: a progressive mesh, little endian, versioned, checksummed.
+//! The layout is specified in `docs/pm-format.md`; this module is its reference implementation.
+
+use std::path::Path;
+
+use crate::error::MeshError;
+use crate::mesh::Mesh;
+use crate::pm::{NO_VERTEX, ProgressiveMesh, VertexSplit};
+
+/// First four bytes of a `.pm` file.
+pub const MAGIC: [u8; 4] = *b"MLPM";
+/// Current format version.
+pub const VERSION: u16 = 1;
+const HEADER_SIZE: usize = 24;
+const CHECKSUM_SIZE: usize = 8;
+/// Fewest bytes a split takes: flags, a one-byte vs, a position, the error.
+const MIN_SPLIT_SIZE: usize = 1 + 1 + 12 + 4;
+
+const HAS_VL: u8 = 1;
+const HAS_VR: u8 = 2;
+const MOVES_VS: u8 = 4;
+
+/// FNV-1a, 64 bit: detects corruption (not tampering).
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
+}
+
+fn put_varint(out: &mut Vec<u8>, mut v: u64) {
+    while v >= 0x80 {
+        out.push((v as u8) | 0x80);
+        v >>= 7;
+    }
+    out.push(v as u8);
+}
+
+fn zigzag(v: i64) -> u64 {
+    ((v << 1) ^ (v >> 63)) as u64
+}
+
+fn unzigzag(v: u64) -> i64 {
+    ((v >> 1) as i64) ^ -((v & 1) as i64)
+}
+
+fn put_f32s(out: &mut Vec<u8>, values: &[f32]) {
+    for v in values {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+}
+
+/// Encodes a progressive mesh.
+pub fn encode(pm: &ProgressiveMesh) -> Vec<u8> {
+    let base = pm.base();
+    let mut out = Vec::with_capacity(HEADER_SIZE + 24 * base.face_count() + 26 * pm.levels() + CHECKSUM_SIZE);
+    out.extend_from_slice(&MAGIC);
+    out.extend_from_slice(&VERSION.to_le_bytes());
+    out.extend_from_slice(&0u16.to_le_bytes());
+    out.extend_from_slice(&(base.vertex_count() as u32).to_le_bytes());
+    out.extend_from_slice(&(base.face_count() as u32).to_le_bytes());
+    out.extend_from_slice(&(pm.levels() as u32).to_le_bytes());
+    out.extend_from_slice(&0u32.to_le_bytes());
+    for p in &base.positions {
+        put_f32s(&mut out, p);
+    }
+    for t in &base.triangles {
+        for v in t {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    for s in pm.splits() {
+        let flags = if s.vl != NO_VERTEX { HAS_VL } else { 0 }
+            | if s.vr != NO_VERTEX { HAS_VR } else { 0 }
+            | if s.moves_vs() { MOVES_VS } else { 0 };
+        out.push(flags);
+        put_varint(&mut out, s.vs as u64);
+        for v in [s.vl, s.vr] {
+            if v != NO_VERTEX {
+                put_varint(&mut out, zigzag(v as i64 - s.vs as i64));
+            }
+        }
+        put_f32s(&mut out, &s.new_position);
+        if s.moves_vs() {
+            put_f32s(&mut out, &s.split_position);
+        }
+        out.extend_from_slice(&s.error.to_le_bytes());
+    }
+    let checksum = fnv1a(&out);
+    out.extend_from_slice(&checksum.to_le_bytes());
+    out
+}
+
+/// Writes a `.pm` file.
+pub fn write_pm(path: impl AsRef<Path>, pm: &ProgressiveMesh) -> Result<(), MeshError> {
+    let path = path.as_ref();
+    std::fs::write(path, encode(pm)).map_err(|e| MeshError::Io { path: path.to_path_buf(), message: e.to_string() })
+}
+
+struct Reader<'a> {
+    bytes: &'a [u8],
+    offset: usize,
+    path: &'a Path,
+}
+
+impl Reader<'_> {
+    fn error(&self, reason: impl Into<String>) -> MeshError {
+        MeshError::parse(self.path, format!("byte {}", self.offset), reason)
+    }
+
+    fn take(&mut self, n: usize) -> Result<&[u8], MeshError> {
+        let end =
+            self.offset.checked_add(n).filter(|&e| e <= self.bytes.len()).ok_or_else(|| self.error("truncated"))?;
+        let slice = &self.bytes[self.offset..end];
+        self.offset = end;
+        Ok(slice)
+    }
+
+    fn u32(&mut self) -> Result<u32, MeshError> {
+        Ok(u32::from_le_bytes(self.take(4)?.try_into().expect("4 bytes")))
+    }
+
+    fn f32(&mut self) -> Result<f32, MeshError> {
+        let v = f32::from_le_bytes(self.take(4)?.try_into().expect("4 bytes"));
+        if !v.is_finite() {
+            self.offset -= 4;
+            return Err(self.error(format!("non-finite value {v}")));
+        }
+        Ok(v)
+    }
+
+    fn position(&mut self) -> Result<[f32; 3], MeshError> {
+        Ok([self.f32()?, self.f32()?, self.f32()?])
+    }
+
+    fn varint(&mut self) -> Result<u64, MeshError> {
+        let mut v = 0u64;
+        for shift in (0..64).step_by(7) {
+            let b = self.take(1)?[0];
+            v |= ((b & 0x7f) as u64) << shift;
+            if b & 0x80 == 0 {
+                return Ok(v);
+            }
+        }
+        Err(self.error("varint longer than 10 bytes"))
+    }
+}
+
+/// Decodes and validates a `.pm` file's bytes. `path` names the file in errors.
+pub fn decode(bytes: &[u8], path: &Path) -> Result<ProgressiveMesh, MeshError> {
+    let mut r = Reader { bytes, offset: 0, path };
+    if bytes.len() < HEADER_SIZE + CHECKSUM_SIZE {
+        return Err(r.error(format!("{} bytes is shorter than a header and checksum (truncated)", bytes.len())));
+    }
+    if r.take(4)? != MAGIC {
+        return Err(MeshError::parse(path, "byte 0", "not a meshlod .pm file (bad magic)"));
+    }
+    let version = u16::from_le_bytes(r.take(2)?.try_into().expect("2 bytes"));
+    if version != VERSION {
+        return Err(MeshError::parse(path, "byte 4", format!("format version {version}; this reader knows {VERSION}")));
+    }
+    r.take(2)?; // flags, reserved
+    let (payload, stored) = bytes.split_at(bytes.len() - CHECKSUM_SIZE);
+    if fnv1a(payload) != u64::from_le_bytes(stored.try_into().expect("8 bytes")) {
+        return Err(MeshError::parse(path, "checksum", "checksum mismatch: the file is corrupt or truncated"));
+    }
+    let r_bytes = payload;
+    let mut r = Reader { bytes: r_bytes, offset: r.offset, path };
+    let vertex_count = r.u32()? as usize;
+    let face_count = r.u32()? as usize;
+    let split_count = r.u32()? as usize;
+    r.u32()?;
+    let needed = (vertex_count as u64) * 12 + (face_count as u64) * 12 + (split_count as u64) * MIN_SPLIT_SIZE as u64;
+    if needed > (r_bytes.len() - HEADER_SIZE) as u64 {
+        return Err(MeshError::parse(
+            path,
+            "header",
+            format!(
+                "declares {vertex_count} vertices, {face_count} faces and {split_count} splits: at least {needed} bytes, but {} follow",
+                r_bytes.len() - HEADER_SIZE
+            ),
+        ));
+    }
+    let mut positions = Vec::with_capacity(vertex_count);
+    for _ in 0..vertex_count {
+        positions.push(r.position()?);
+    }
+    let mut triangles = Vec::with_capacity(face_count);
+    for f in 0..face_count {
+        let t = [r.u32()?, r.u32()?, r.u32()?];
+        if let Some(&bad) = t.iter().find(|&&v| v as usize >= vertex_count) {
+            return Err(MeshError::parse(path, format!("base face {f}"), format!("vertex {bad} out of range")));
+        }
+        triangles.push(t);
+    }
+    let mut splits = Vec::with_capacity(split_count);
+    for j in 0..split_count {
+        let flags = r.take(1)?[0];
+        if flags & !(HAS_VL | HAS_VR | MOVES_VS) != 0 || flags & (HAS_VL | HAS_VR) == 0 {
+            return Err(MeshError::parse(path, format!("split {j}"), format!("invalid flags {flags:#04x}")));
+        }
+        let limit = (vertex_count + j) as u64;
+        let vs = r.varint()?;
+        if vs >= limit {
+            return Err(MeshError::parse(
+                path,
+                format!("split {j}"),
+                format!("vs {vs} out of range ({limit} vertices)"),
+            ));
+        }
+        let neighbour = |present: bool, r: &mut Reader| -> Result<u32, MeshError> {
+            if !present {
+                return Ok(NO_VERTEX);
+            }
+            let v = vs as i64 + unzigzag(r.varint()?);
+            if v < 0 || v as u64 >= limit {
+                return Err(MeshError::parse(path, format!("split {j}"), format!("neighbour {v} out of range")));
+            }
+            Ok(v as u32)
+        };
+        let vl = neighbour(flags & HAS_VL != 0, &mut r)?;
+        let vr = neighbour(flags & HAS_VR != 0, &mut r)?;
+        let new_position = r.position()?;
+        let split_position = if flags & MOVES_VS != 0 { Some(r.position()?) } else { None };
+        let error = r.f32()?;
+        splits.push(VertexSplit {
+            vs: vs as u32,
+            vl,
+            vr,
+            new_position,
+            split_position: split_position.unwrap_or([0.0; 3]),
+            // Filled in below by replaying the splits.
+            collapsed_position: [0.0; 3],
+            error,
+        });
+        // Placeholder marks "does not move"; resolved in the replay.
+        if split_position.is_none() {
+            splits[j].split_position = [f32::NAN; 3];
+        }
+    }
+    if r.offset != r_bytes.len() {
+        return Err(r.error(format!("{} unexpected bytes after the last split", r_bytes.len() - r.offset)));
+    }
+    // Where vs sat before each split is its position at that level: replay the positions.
+    let mut current = positions.clone();
+    current.resize(vertex_count + split_count, [0.0; 3]);
+    for (j, s) in splits.iter_mut().enumerate() {
+        s.collapsed_position = current[s.vs as usize];
+        if s.split_position[0].is_nan() {
+            s.split_position = s.collapsed_position;
+        }
+        current[s.vs as usize] = s.split_position;
+        current[vertex_count + j] = s.new_position;
+    }
+    let base = Mesh { positions, triangles, corners: Default::default() };
+    ProgressiveMesh::from_parts(base, splits).map_err(|e| match e {
+        MeshError::Parse { location, reason, .. } => MeshError::Parse { path: path.to_path_buf(), location, reason },
+        other => other,
+    })
+}
+
+/// Reads a `.pm` file.
+pub fn read_pm(path: impl AsRef<Path>) -> Result<ProgressiveMesh, MeshError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|e| MeshError::Io { path: path.to_path_buf(), message: e.to_string() })?;
+    decode(&bytes, path)
+}

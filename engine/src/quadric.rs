@@ -1,0 +1,138 @@
+//! Garland–Heckbert error quadrics.
+//!
+//! M. Garland, P. Heckbert, "Surface simplification using quadric error metrics", SIGGRAPH 1997.
+//!
+//! A quadric stores `Σ wᵢ (nᵢ·v + dᵢ)²` for planes `(nᵢ, dᵢ)` with weights `wᵢ` (face areas here), as
+//! the ten distinct entries of the symmetric 4×4 matrix plus the total weight, so that
+//! `error(v) / weight` is a weighted mean squared distance and its square root a distance.
+
+use glam::{DMat3, DVec3};
+
+/// A weighted sum of squared distances to planes.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Quadric {
+    a2: f64,
+    ab: f64,
+    ac: f64,
+    ad: f64,
+    b2: f64,
+    bc: f64,
+    bd: f64,
+    c2: f64,
+    cd: f64,
+    d2: f64,
+    /// Sum of the plane weights.
+    pub weight: f64,
+}
+
+impl Quadric {
+    /// The quadric of one plane through `point` with unit `normal`, scaled by `weight`.
+    pub fn from_plane(normal: DVec3, point: DVec3, weight: f64) -> Quadric {
+        let (a, b, c) = (normal.x, normal.y, normal.z);
+        let d = -normal.dot(point);
+        Quadric {
+            a2: weight * a * a,
+            ab: weight * a * b,
+            ac: weight * a * c,
+            ad: weight * a * d,
+            b2: weight * b * b,
+            bc: weight * b * c,
+            bd: weight * b * d,
+            c2: weight * c * c,
+            cd: weight * c * d,
+            d2: weight * d * d,
+            weight,
+        }
+    }
+
+    /// A constraint plane: adds `weight · distance²` to the error but nothing to [`Quadric::weight`],
+    /// so it shapes where vertices go without counting as surface area in [`Quadric::distance`].
+    pub fn constraint(normal: DVec3, point: DVec3, weight: f64) -> Quadric {
+        Quadric { weight: 0.0, ..Quadric::from_plane(normal, point, weight) }
+    }
+
+    /// `vᵀ Q v`: the weighted sum of squared plane distances at `v` (never negative).
+    #[inline]
+    pub fn error(&self, v: DVec3) -> f64 {
+        let (x, y, z) = (v.x, v.y, v.z);
+        let e = x * (self.a2 * x + 2.0 * (self.ab * y + self.ac * z + self.ad))
+            + y * (self.b2 * y + 2.0 * (self.bc * z + self.bd))
+            + z * (self.c2 * z + 2.0 * self.cd)
+            + self.d2;
+        e.max(0.0)
+    }
+
+    /// Root of the weighted mean squared distance at `v`: an absolute distance estimate.
+    pub fn distance(&self, v: DVec3) -> f64 {
+        if self.weight > 0.0 { (self.error(v) / self.weight).sqrt() } else { 0.0 }
+    }
+
+    /// The point minimising the error, if the 3×3 system is well conditioned.
+    ///
+    /// The determinant is compared with the cube of the matrix scale so that the test does not
+    /// depend on the mesh's units: a flat or cylindrical neighbourhood (rank < 3) has no unique
+    /// minimiser and returns `None`.
+    pub fn minimizer(&self) -> Option<DVec3> {
+        let m = DMat3::from_cols(
+            DVec3::new(self.a2, self.ab, self.ac),
+            DVec3::new(self.ab, self.b2, self.bc),
+            DVec3::new(self.ac, self.bc, self.c2),
+        );
+        let scale = self.a2 + self.b2 + self.c2;
+        let det = m.determinant();
+        if scale.is_nan() || scale <= 0.0 || det.abs() <= 1e-9 * scale * scale * scale {
+            return None;
+        }
+        let v = m.inverse() * -DVec3::new(self.ad, self.bd, self.cd);
+        v.is_finite().then_some(v)
+    }
+}
+
+impl std::ops::Add for Quadric {
+    type Output = Quadric;
+    fn add(self, o: Quadric) -> Quadric {
+        Quadric {
+            a2: self.a2 + o.a2,
+            ab: self.ab + o.ab,
+            ac: self.ac + o.ac,
+            ad: self.ad + o.ad,
+            b2: self.b2 + o.b2,
+            bc: self.bc + o.bc,
+            bd: self.bd + o.bd,
+            c2: self.c2 + o.c2,
+            cd: self.cd + o.cd,
+            d2: self.d2 + o.d2,
+            weight: self.weight + o.weight,
+        }
+    }
+}
+
+impl std::ops::AddAssign for Quadric {
+    fn add_assign(&mut self, o: Quadric) {
+        *self = *self + o;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plane_error_is_squared_distance() {
+        let q = Quadric::from_plane(DVec3::Z, DVec3::new(0.0, 0.0, 1.0), 2.0);
+        assert!((q.error(DVec3::new(5.0, -3.0, 4.0)) - 2.0 * 9.0).abs() < 1e-12);
+        assert!((q.distance(DVec3::new(0.0, 0.0, -1.0)) - 2.0).abs() < 1e-12);
+        assert!(q.minimizer().is_none(), "a single plane has no unique minimiser");
+    }
+
+    #[test]
+    fn three_planes_meet_at_their_corner() {
+        let corner = DVec3::new(1.0, 2.0, 3.0);
+        let q = Quadric::from_plane(DVec3::X, corner, 1.0)
+            + Quadric::from_plane(DVec3::Y, corner, 1.0)
+            + Quadric::from_plane(DVec3::Z, corner, 1.0);
+        let v = q.minimizer().unwrap();
+        assert!((v - corner).length() < 1e-12);
+        assert!(q.error(v) < 1e-20);
+    }
+}

@@ -1,0 +1,945 @@
+//! Edge-collapse simplification with the QFVP, QEM and Melax costs, recorded as a progressive mesh.
+//!
+//! Sources:
+//! - QFVP: the cost `vᵀQv · (1 − cos θ)^w` of the "quadric + feature-vertex-preserving" progressive
+//!   mesh paper (`../shared/papers/qfvp-progressive-mesh.txt`), θ the angle between the normals of
+//!   the two endpoints, w ∈ [0, 2]; w = 0 is plain QEM.
+//! - QEM: M. Garland, P. Heckbert, "Surface simplification using quadric error metrics", 1997.
+//! - Melax: S. Melax, "A simple, fast and effective polygon reduction algorithm", Game Developer,
+//!   1998 — cost = edge length × curvature term.
+//! - Progressive meshes: H. Hoppe, "Progressive meshes", SIGGRAPH 1996.
+//!
+//! Data flows in this order: preparation (drop unusable faces, classify vertices) → quadrics and
+//! normals → one priority queue of candidate collapses (stale entries skipped by per-vertex version
+//! stamps, as in the paper) → validity checks at pop time → collapse and log → output mesh and,
+//! if asked, the progressive mesh built from the log (`crate::pm`).
+//!
+//! ## Ordering and ties
+//! The queue is ordered by `(cost, quadric error)`. For QFVP with w > 0 the cost is exactly zero
+//! where both endpoint normals agree (flat regions): those collapses all cost nothing, and among
+//! them the quadric error decides, so flat regions are simplified in the order plain QEM would use.
+//!
+//! ## Legality of a collapse (a, b) → a at position p, checked in this order
+//! ```text
+//!        vl                  vl
+//!       /  \                 |
+//!      /    \                |
+//!     a------b     ==>       a (at p)
+//!      \    /                |
+//!       \  /                 |
+//!        vr                  vr
+//! ```
+//! 1. neither endpoint is frozen (non-manifold or inconsistently oriented neighbourhood);
+//! 2. boundaries: an interior edge with both ends on the boundary is refused (it would pinch the
+//!    surface); a boundary vertex is never removed in favour of an interior one and does not move
+//!    off its boundary; with [`BoundaryMode::Lock`] boundary vertices never move or disappear;
+//! 3. link condition: the common neighbours of a and b are exactly vl and vr (Dey et al.), and the
+//!    merged vertex keeps at least one face (three for an interior vertex), so the surface stays a
+//!    2-manifold and no component collapses to nothing;
+//! 4. every face that survives around a or b keeps a normal within
+//!    [`SimplifyOptions::max_normal_change_degrees`] of its old one (no flips);
+//! 5. no surviving face becomes a needle or zero-area triangle ([`MIN_TRIANGLE_QUALITY`]).
+
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering as AtomicOrdering};
+use std::time::Instant;
+
+use glam::DVec3;
+use serde::Serialize;
+
+use crate::error::MeshError;
+use crate::mesh::{DistanceUnits, Mesh};
+use crate::pm::{CollapseRecord, ProgressiveMesh};
+use crate::quadric::Quadric;
+use crate::topology::Topology;
+
+/// The collapse cost.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "metric", rename_all = "lowercase")]
+pub enum Metric {
+    /// `vᵀQv · (1 − cos θ)^w`, w ∈ [0, 2].
+    Qfvp {
+        /// Exponent of the normal-angle term.
+        w: f64,
+    },
+    /// Plain quadric error `vᵀQv` (QFVP with w = 0).
+    Qem,
+    /// Melax: edge length × curvature; the removed vertex moves onto the survivor.
+    Melax,
+}
+
+impl Metric {
+    /// Short name as the CLI spells it.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Metric::Qfvp { .. } => "qfvp",
+            Metric::Qem => "qem",
+            Metric::Melax => "melax",
+        }
+    }
+
+    /// The QFVP exponent (0 for QEM, none for Melax).
+    pub fn w(&self) -> Option<f64> {
+        match self {
+            Metric::Qfvp { w } => Some(*w),
+            Metric::Qem => Some(0.0),
+            Metric::Melax => None,
+        }
+    }
+}
+
+/// Where the merged vertex goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Placement {
+    /// The paper's rule: the best of the two endpoints and their midpoint.
+    Paper,
+    /// The quadric minimiser when well conditioned and near the edge, else the paper's rule.
+    Optimal,
+    /// The better endpoint (half-edge collapse): vertices never move, so each vertex split
+    /// carries one position and the `.pm` file is smallest.
+    Endpoint,
+}
+
+/// How the merged vertex's normal is found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum NormalUpdate {
+    /// The paper's linear estimate `(cs·ns + ct·nt) / (cs + ct)`, cs, ct the endpoint face counts.
+    Linear,
+    /// Mean of the face normals of the merged vertex's new fan.
+    Recompute,
+}
+
+/// How open boundaries are kept.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BoundaryMode {
+    /// Boundary vertices may collapse along their boundary; planes perpendicular to the boundary
+    /// faces are added to their quadrics so the border keeps its shape.
+    Preserve,
+    /// Boundary vertices never move and are never removed.
+    Lock,
+}
+
+/// Options of [`simplify`]. Targets combine: simplification stops at whichever is met first.
+#[derive(Debug, Clone)]
+pub struct SimplifyOptions {
+    /// Stop when at most this many faces remain.
+    pub target_faces: Option<usize>,
+    /// Stop when this fraction of the faces has been removed (0.9 keeps 10%), as in the paper.
+    pub target_ratio: Option<f64>,
+    /// Stop before a collapse whose error estimate exceeds this, in paper units.
+    pub max_error: Option<f64>,
+    /// Collapse cost.
+    pub metric: Metric,
+    /// Placement of the merged vertex (Melax always uses the surviving endpoint).
+    pub placement: Placement,
+    /// Normal of the merged vertex.
+    pub normals: NormalUpdate,
+    /// Boundary handling.
+    pub boundary: BoundaryMode,
+    /// Largest change of a face normal a collapse may cause, in degrees (0, 180].
+    pub max_normal_change_degrees: f64,
+    /// Build the progressive mesh (base mesh + vertex splits).
+    pub record_progressive: bool,
+    /// Set to `true` by another thread to stop the work; the call then returns
+    /// [`MeshError::Cancelled`].
+    pub cancel: Option<Arc<AtomicBool>>,
+}
+
+impl Default for SimplifyOptions {
+    fn default() -> Self {
+        SimplifyOptions {
+            target_faces: None,
+            target_ratio: Some(0.5),
+            max_error: None,
+            metric: Metric::Qfvp { w: 1.0 },
+            placement: Placement::Optimal,
+            normals: NormalUpdate::Linear,
+            boundary: BoundaryMode::Preserve,
+            max_normal_change_degrees: 90.0,
+            record_progressive: false,
+            cancel: None,
+        }
+    }
+}
+
+/// Why the collapse loop ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// The face target (count or ratio) was reached.
+    TargetReached,
+    /// The next collapse would have exceeded `max_error`.
+    MaxErrorReached,
+    /// No legal collapse remained (every candidate would break manifoldness, flip a face, touch a
+    /// locked vertex or a boundary rule) before the target.
+    NoLegalCollapse,
+}
+
+/// Figures of one run.
+#[derive(Debug, Clone, Serialize)]
+pub struct SimplifyStats {
+    /// Faces of the input (after dropping faces that repeat a vertex).
+    pub faces_in: usize,
+    /// Faces of the output.
+    pub faces_out: usize,
+    /// Referenced vertices of the input.
+    pub vertices_in: usize,
+    /// Vertices of the output.
+    pub vertices_out: usize,
+    /// The face target that applied.
+    pub target_faces: usize,
+    /// Collapses performed.
+    pub collapses: usize,
+    /// Why it stopped.
+    pub stop_reason: StopReason,
+    /// Largest collapse error estimate, paper units.
+    pub max_collapse_error: f64,
+    /// Candidates refused by the legality checks.
+    pub rejected: usize,
+    /// Vertices no collapse may touch: non-manifold or inconsistently oriented neighbourhoods, and
+    /// boundary vertices under [`BoundaryMode::Lock`].
+    pub frozen_vertices: usize,
+    /// Faces dropped before simplifying because they repeat a vertex index.
+    pub dropped_degenerate_faces: usize,
+    /// Wall time in seconds.
+    pub seconds: f64,
+}
+
+/// Result of [`simplify`].
+#[derive(Debug, Clone)]
+pub struct Simplified {
+    /// The simplified mesh: surviving vertices in input order, surviving faces in input order.
+    pub mesh: Mesh,
+    /// The progressive mesh, when asked for.
+    pub progressive: Option<ProgressiveMesh>,
+    /// Figures of the run.
+    pub stats: SimplifyStats,
+}
+
+/// Smallest `4√3·area / Σ edge²` (1 for an equilateral triangle) a collapse may create.
+pub const MIN_TRIANGLE_QUALITY: f64 = 1e-3;
+
+/// Two faces sharing an edge at the merged vertex may not end up with normals whose dot product is
+/// below this (a fold of more than ~154°).
+pub const FOLD_DOT: f64 = -0.9;
+
+/// Times the queue is rebuilt from all remaining edges when it runs dry before the target: a
+/// candidate refused earlier may have become legal after its neighbourhood changed.
+pub const MAX_PASSES: usize = 4;
+
+/// Weight of the boundary-constraint planes relative to the face planes.
+const BOUNDARY_WEIGHT: f64 = 10.0;
+
+/// How often (in queue pops) the cancel flag is read.
+const CANCEL_CHECK_INTERVAL: usize = 256;
+
+pub(crate) const NONE: u32 = u32::MAX;
+
+/// Vertex classification fixed at the start.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum VertexKind {
+    Interior,
+    Boundary,
+    /// Non-manifold or inconsistently oriented: no collapse touches it.
+    Frozen,
+}
+
+/// Mutable state of one run: the algorithm owns it; nothing is left attached to the input mesh.
+struct State<'o> {
+    options: &'o SimplifyOptions,
+    positions: Vec<[f32; 3]>,
+    triangles: Vec<[u32; 3]>,
+    face_alive: Vec<bool>,
+    vertex_faces: Vec<Vec<u32>>,
+    vertex_alive: Vec<bool>,
+    kind: Vec<VertexKind>,
+    version: Vec<u32>,
+    quadrics: Vec<Quadric>,
+    normals: Vec<DVec3>,
+    /// Scratch marks for the link condition.
+    mark: Vec<u32>,
+    mark_stamp: u32,
+    /// Scratch for the fold check: the two other corners and the new unit normal of each face.
+    fan_scratch: Vec<([u32; 2], DVec3)>,
+    cos_max_normal_change: f64,
+}
+
+/// A collapse ready to apply: `removed` merges into `survivor`, which moves to `position`.
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    cost: f64,
+    error: f64,
+    survivor: u32,
+    removed: u32,
+    position: [f32; 3],
+}
+
+#[derive(Debug, Clone, Copy)]
+struct HeapEntry {
+    cost: f64,
+    error: f64,
+    a: u32,
+    b: u32,
+    version_a: u32,
+    version_b: u32,
+}
+
+impl PartialEq for HeapEntry {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+impl Eq for HeapEntry {}
+impl PartialOrd for HeapEntry {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for HeapEntry {
+    /// Reversed so that `BinaryHeap` pops the cheapest; ties broken by error, then by vertex ids so
+    /// the order (and the progressive mesh) is deterministic.
+    fn cmp(&self, other: &Self) -> Ordering {
+        other
+            .cost
+            .total_cmp(&self.cost)
+            .then(other.error.total_cmp(&self.error))
+            .then(other.a.cmp(&self.a))
+            .then(other.b.cmp(&self.b))
+    }
+}
+
+#[inline]
+fn to_f64(p: [f32; 3]) -> DVec3 {
+    DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+}
+
+#[inline]
+fn to_f32(p: DVec3) -> [f32; 3] {
+    [p.x as f32, p.y as f32, p.z as f32]
+}
+
+/// `4√3·area / Σ edge²`: 1 for equilateral, 0 for degenerate.
+fn triangle_quality(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let area2 = (b - a).cross(c - a).length();
+    let sum = (b - a).length_squared() + (c - b).length_squared() + (a - c).length_squared();
+    if sum > 0.0 { 2.0 * 3f64.sqrt() * area2 / sum } else { 0.0 }
+}
+
+impl<'o> State<'o> {
+    fn point(&self, v: u32) -> DVec3 {
+        to_f64(self.positions[v as usize])
+    }
+
+    fn face_normal(&self, f: u32) -> DVec3 {
+        let [a, b, c] = self.triangles[f as usize];
+        let (pa, pb, pc) = (self.point(a), self.point(b), self.point(c));
+        (pb - pa).cross(pc - pa).normalize_or_zero()
+    }
+
+    /// Mean of the unit normals of the faces around `v` (Gouraud).
+    fn fan_normal(&self, v: u32) -> DVec3 {
+        let sum: DVec3 = self.vertex_faces[v as usize].iter().map(|&f| self.face_normal(f)).sum();
+        sum.normalize_or_zero()
+    }
+
+    /// Faces on edge (a, b): those around `a` that also contain `b`.
+    fn edge_faces(&self, a: u32, b: u32) -> ([u32; 2], usize) {
+        let mut out = [NONE; 2];
+        let mut n = 0;
+        for &f in &self.vertex_faces[a as usize] {
+            if self.triangles[f as usize].contains(&b) {
+                if n < 2 {
+                    out[n] = f;
+                }
+                n += 1;
+            }
+        }
+        (out, n)
+    }
+
+    /// The collapse of edge {a, b} the metric prefers, or `None` if the rules forbid every
+    /// direction and placement. Geometry-independent rules only; the rest is in `is_legal`.
+    fn evaluate(&self, a: u32, b: u32) -> Option<Candidate> {
+        let (ka, kb) = (self.kind[a as usize], self.kind[b as usize]);
+        if ka == VertexKind::Frozen || kb == VertexKind::Frozen {
+            return None;
+        }
+        let lock = self.options.boundary == BoundaryMode::Lock;
+        let (_, shared) = self.edge_faces(a, b);
+        // Which endpoints may survive, and whether the survivor may move.
+        let (may_keep_a, may_keep_b, may_move) = match (ka, kb) {
+            (VertexKind::Boundary, VertexKind::Boundary) => {
+                if shared != 1 || lock {
+                    return None; // interior edge joining two boundary points, or locked border
+                }
+                (true, true, true)
+            }
+            (VertexKind::Boundary, _) => (true, false, false),
+            (_, VertexKind::Boundary) => (false, true, false),
+            _ => (true, true, true),
+        };
+        let q = self.quadrics[a as usize] + self.quadrics[b as usize];
+        let (pa, pb) = (self.point(a), self.point(b));
+        let mut best: Option<Candidate> = None;
+        let mut consider = |survivor: u32, removed: u32, p: DVec3, cost_of: &dyn Fn(DVec3, f64) -> f64| {
+            let error = q.error(p);
+            let cost = cost_of(p, error);
+            let better = match &best {
+                None => true,
+                Some(c) => (cost, error) < (c.cost, c.error),
+            };
+            if better {
+                best = Some(Candidate { cost, error, survivor, removed, position: to_f32(p) });
+            }
+        };
+        match self.options.metric {
+            Metric::Melax => {
+                if may_keep_b {
+                    let c = self.melax_cost(a, b);
+                    consider(b, a, pb, &|_, _| c);
+                }
+                if may_keep_a {
+                    let c = self.melax_cost(b, a);
+                    consider(a, b, pa, &|_, _| c);
+                }
+            }
+            Metric::Qem | Metric::Qfvp { .. } => {
+                let w = self.options.metric.w().unwrap_or(0.0);
+                let factor = if w == 0.0 {
+                    1.0
+                } else {
+                    let cos = self.normals[a as usize].dot(self.normals[b as usize]).clamp(-1.0, 1.0);
+                    (1.0 - cos).powf(w)
+                };
+                let cost_of = |_: DVec3, error: f64| error * factor;
+                // The survivor of a moving collapse: the endpoint that already has more faces,
+                // so fewer faces change corners (smaller vertex split).
+                let mover = if self.vertex_faces[a as usize].len() >= self.vertex_faces[b as usize].len() {
+                    (a, b)
+                } else {
+                    (b, a)
+                };
+                let mover = match (may_keep_a, may_keep_b) {
+                    (true, false) => (a, b),
+                    (false, true) => (b, a),
+                    _ => mover,
+                };
+                if may_keep_a {
+                    consider(a, b, pa, &cost_of);
+                }
+                if may_keep_b {
+                    consider(b, a, pb, &cost_of);
+                }
+                let on_boundary = ka == VertexKind::Boundary && kb == VertexKind::Boundary;
+                if may_move && self.options.placement != Placement::Endpoint {
+                    consider(mover.0, mover.1, (pa + pb) * 0.5, &cost_of);
+                    if self.options.placement == Placement::Optimal && on_boundary {
+                        // A boundary edge's vertex stays on the edge: the best point of the segment
+                        // (the error along it is a parabola through its values at 0, ½ and 1).
+                        let (e0, e1, e2) = (q.error(pa), q.error((pa + pb) * 0.5), q.error(pb));
+                        let curvature = e0 - 2.0 * e1 + e2;
+                        if curvature > 0.0 {
+                            let t = (0.25 * (3.0 * e0 - 4.0 * e1 + e2) / curvature).clamp(0.0, 1.0);
+                            consider(mover.0, mover.1, pa + (pb - pa) * t, &cost_of);
+                        }
+                    } else if self.options.placement == Placement::Optimal
+                        && let Some(p) = q.minimizer()
+                    {
+                        // Never outside a sane neighbourhood: within one edge length of the
+                        // midpoint (the minimiser of a nearly singular system can run far off).
+                        let reach = (pa - pb).length();
+                        if (p - (pa + pb) * 0.5).length() <= reach {
+                            consider(mover.0, mover.1, p, &cost_of);
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    /// Melax's cost of moving `u` onto `v`: |u − v| × max over faces f at u of
+    /// min over faces n on edge uv of (1 − f·n) / 2.
+    fn melax_cost(&self, u: u32, v: u32) -> f64 {
+        let length = (self.point(u) - self.point(v)).length();
+        let (shared, count) = self.edge_faces(u, v);
+        let shared = &shared[..count.min(2)];
+        let mut curvature: f64 = 0.0;
+        for &f in &self.vertex_faces[u as usize] {
+            let nf = self.face_normal(f);
+            let min = shared.iter().map(|&s| (1.0 - nf.dot(self.face_normal(s))) / 2.0).fold(1.0f64, f64::min);
+            curvature = curvature.max(min);
+        }
+        length * curvature
+    }
+
+    /// Link condition, fan size, normal-change and quality checks for a candidate.
+    fn is_legal(&mut self, c: &Candidate) -> bool {
+        let (a, b) = (c.survivor, c.removed);
+        let (shared, shared_count) = self.edge_faces(a, b);
+        if shared_count == 0 || shared_count > 2 {
+            return false;
+        }
+        // Link condition: common neighbours are exactly the opposite vertices of the edge faces.
+        self.mark_stamp = self.mark_stamp.wrapping_add(1);
+        if self.mark_stamp == 0 {
+            self.mark.iter_mut().for_each(|m| *m = 0);
+            self.mark_stamp = 1;
+        }
+        let stamp = self.mark_stamp;
+        for &f in &self.vertex_faces[a as usize] {
+            for v in self.triangles[f as usize] {
+                self.mark[v as usize] = stamp;
+            }
+        }
+        let mut common = 0;
+        let opposite: Vec<u32> = shared[..shared_count]
+            .iter()
+            .map(|&f| {
+                *self.triangles[f as usize].iter().find(|&&v| v != a && v != b).expect("triangle has three vertices")
+            })
+            .collect();
+        for &f in &self.vertex_faces[b as usize] {
+            for v in self.triangles[f as usize] {
+                if v != a && v != b && self.mark[v as usize] == stamp {
+                    self.mark[v as usize] = stamp.wrapping_sub(1); // count each neighbour once
+                    if !opposite.contains(&v) {
+                        return false;
+                    }
+                    common += 1;
+                }
+            }
+        }
+        if common != shared_count {
+            return false;
+        }
+        // The merged vertex keeps enough faces.
+        let remaining = self.vertex_faces[a as usize].len() + self.vertex_faces[b as usize].len() - 2 * shared_count;
+        let interior = self.kind[a as usize] == VertexKind::Interior && self.kind[b as usize] == VertexKind::Interior;
+        if remaining < if interior { 3 } else { 1 } {
+            return false;
+        }
+        // Surviving faces: no flip beyond the threshold, no needle.
+        let p = to_f64(c.position);
+        let mut fan = std::mem::take(&mut self.fan_scratch);
+        fan.clear();
+        for &v in &[a, b] {
+            for &f in &self.vertex_faces[v as usize] {
+                let t = self.triangles[f as usize];
+                if t.contains(&a) && t.contains(&b) {
+                    continue;
+                }
+                let old: [DVec3; 3] = t.map(|x| self.point(x));
+                let new: [DVec3; 3] = t.map(|x| if x == a || x == b { p } else { self.point(x) });
+                let n_old = (old[1] - old[0]).cross(old[2] - old[0]);
+                let n_new = (new[1] - new[0]).cross(new[2] - new[0]);
+                let (lo, ln) = (n_old.length(), n_new.length());
+                if ln == 0.0 || triangle_quality(new[0], new[1], new[2]) < MIN_TRIANGLE_QUALITY {
+                    self.fan_scratch = fan;
+                    return false;
+                }
+                if lo > 0.0 && n_old.dot(n_new) < self.cos_max_normal_change * lo * ln {
+                    self.fan_scratch = fan;
+                    return false;
+                }
+                let i = t.iter().position(|&x| x == a || x == b).expect("face of a or b");
+                let (x, y) = (t[(i + 1) % 3], t[(i + 2) % 3]);
+                let n_new = n_new / ln;
+                // The face across the far edge (x, y) keeps its normal; the moved face must not
+                // fold onto it.
+                let across = self.vertex_faces[x as usize].iter().find(|&&g| {
+                    let u = self.triangles[g as usize];
+                    u.contains(&y) && !u.contains(&a) && !u.contains(&b)
+                });
+                if let Some(&g) = across
+                    && self.face_normal(g).dot(n_new) < FOLD_DOT
+                {
+                    self.fan_scratch = fan;
+                    return false;
+                }
+                fan.push(([x, y], n_new));
+            }
+        }
+        // No fold: two faces of the new fan that share an edge must not turn back onto each other
+        // (a sequence of small per-face normal changes can otherwise fold a pair over).
+        for i in 0..fan.len() {
+            for j in i + 1..fan.len() {
+                let (oi, ni) = fan[i];
+                let (oj, nj) = fan[j];
+                let share = oi.iter().any(|x| oj.contains(x));
+                if share && ni.dot(nj) < FOLD_DOT {
+                    self.fan_scratch = fan;
+                    return false;
+                }
+            }
+        }
+        self.fan_scratch = fan;
+        true
+    }
+
+    /// Applies a legal collapse and returns its log record.
+    fn collapse(&mut self, c: &Candidate) -> CollapseRecord {
+        let (a, b) = (c.survivor, c.removed);
+        let (shared, shared_count) = self.edge_faces(a, b);
+        let mut record = CollapseRecord {
+            survivor: a,
+            removed: b,
+            left: NONE,
+            right: NONE,
+            left_face: NONE,
+            right_face: NONE,
+            survivor_position: self.positions[a as usize],
+            removed_position: self.positions[b as usize],
+            collapsed_position: c.position,
+            error: 0.0,
+        };
+        for &f in &shared[..shared_count] {
+            let t = self.triangles[f as usize];
+            let third = *t.iter().find(|&&v| v != a && v != b).expect("three vertices");
+            // The face with half-edge a→b is the left face of the split (vs = a, vt = b).
+            let i = t.iter().position(|&v| v == a).expect("contains a");
+            if t[(i + 1) % 3] == b {
+                record.left = third;
+                record.left_face = f;
+            } else {
+                record.right = third;
+                record.right_face = f;
+            }
+            self.face_alive[f as usize] = false;
+            for v in t {
+                self.vertex_faces[v as usize].retain(|&g| g != f);
+            }
+        }
+        let count_a = self.vertex_faces[a as usize].len() as f64;
+        let count_b = self.vertex_faces[b as usize].len() as f64;
+        let moved = std::mem::take(&mut self.vertex_faces[b as usize]);
+        for &f in &moved {
+            for corner in self.triangles[f as usize].iter_mut() {
+                if *corner == b {
+                    *corner = a;
+                }
+            }
+        }
+        self.vertex_faces[a as usize].extend(moved);
+        self.vertex_alive[b as usize] = false;
+        self.positions[a as usize] = c.position;
+        let qb = self.quadrics[b as usize];
+        self.quadrics[a as usize] += qb;
+        self.normals[a as usize] = match self.options.normals {
+            NormalUpdate::Linear => {
+                let n = self.normals[a as usize] * count_a + self.normals[b as usize] * count_b;
+                let n = n.normalize_or_zero();
+                if n == DVec3::ZERO { self.fan_normal(a) } else { n }
+            }
+            NormalUpdate::Recompute => self.fan_normal(a),
+        };
+        self.version[a as usize] = self.version[a as usize].wrapping_add(1);
+        self.version[b as usize] = self.version[b as usize].wrapping_add(1);
+        record
+    }
+
+    fn push_edges_of(&mut self, v: u32, heap: &mut BinaryHeap<HeapEntry>, neighbours: &mut Vec<u32>) {
+        neighbours.clear();
+        for &f in &self.vertex_faces[v as usize] {
+            for u in self.triangles[f as usize] {
+                if u != v {
+                    neighbours.push(u);
+                }
+            }
+        }
+        neighbours.sort_unstable();
+        neighbours.dedup();
+        for &u in neighbours.iter() {
+            self.push_edge(v, u, heap);
+        }
+    }
+
+    fn push_edge(&self, a: u32, b: u32, heap: &mut BinaryHeap<HeapEntry>) {
+        let (a, b) = (a.min(b), a.max(b));
+        if let Some(c) = self.evaluate(a, b) {
+            heap.push(HeapEntry {
+                cost: c.cost,
+                error: c.error,
+                a,
+                b,
+                version_a: self.version[a as usize],
+                version_b: self.version[b as usize],
+            });
+        }
+    }
+}
+
+/// Checks options against the mesh and returns the face target.
+fn target_faces(options: &SimplifyOptions, faces: usize) -> Result<usize, MeshError> {
+    if let Some(r) = options.target_ratio
+        && !(0.0..1.0).contains(&r)
+    {
+        return Err(MeshError::InvalidParameter {
+            name: "ratio",
+            reason: format!("{r} is outside [0, 1): it is the fraction of faces removed"),
+        });
+    }
+    if let Metric::Qfvp { w } = options.metric
+        && !(0.0..=2.0).contains(&w)
+    {
+        return Err(MeshError::InvalidParameter { name: "w", reason: format!("{w} is outside [0, 2]") });
+    }
+    if let Some(e) = options.max_error
+        && (e.is_nan() || e < 0.0)
+    {
+        return Err(MeshError::InvalidParameter { name: "max_error", reason: format!("{e} must be ≥ 0") });
+    }
+    let angle = options.max_normal_change_degrees;
+    if !(angle > 0.0 && angle <= 180.0) {
+        return Err(MeshError::InvalidParameter {
+            name: "max_normal_change_degrees",
+            reason: format!("{angle} is outside (0, 180]"),
+        });
+    }
+    let by_ratio = options.target_ratio.map(|r| ((faces as f64) * (1.0 - r)).round() as usize);
+    Ok(match (options.target_faces, by_ratio) {
+        (Some(n), Some(m)) => n.max(m),
+        (Some(n), None) => n,
+        (None, Some(m)) => m,
+        (None, None) => 0,
+    })
+}
+
+/// Drops faces that repeat a vertex and vertices that no face uses. Returns the prepared mesh,
+/// the input index of each kept vertex, and the number of dropped faces.
+pub fn prepare(mesh: &Mesh) -> (Mesh, Vec<u32>, usize) {
+    let kept: Vec<[u32; 3]> =
+        mesh.triangles.iter().copied().filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]).collect();
+    let dropped = mesh.face_count() - kept.len();
+    let mut new_index = vec![NONE; mesh.vertex_count()];
+    for t in &kept {
+        for &v in t {
+            new_index[v as usize] = 0;
+        }
+    }
+    let mut input_vertex = Vec::new();
+    for (v, slot) in new_index.iter_mut().enumerate() {
+        if *slot != NONE {
+            *slot = input_vertex.len() as u32;
+            input_vertex.push(v as u32);
+        }
+    }
+    let positions = input_vertex.iter().map(|&v| mesh.positions[v as usize]).collect();
+    let triangles = kept.iter().map(|t| t.map(|v| new_index[v as usize])).collect();
+    (Mesh { positions, triangles, corners: Default::default() }, input_vertex, dropped)
+}
+
+fn classify(mesh: &Mesh, topology: &Topology) -> Vec<VertexKind> {
+    let mut kind = vec![VertexKind::Interior; mesh.vertex_count()];
+    for (e, &[a, b]) in topology.edges.iter().enumerate() {
+        let faces = topology.edge_faces.get(e);
+        let k = match faces.len() {
+            1 => VertexKind::Boundary,
+            2 => {
+                let forward = |f: usize| {
+                    let t = mesh.triangles[f];
+                    (0..3).any(|i| t[i] == a && t[(i + 1) % 3] == b)
+                };
+                if forward(faces[0].index()) == forward(faces[1].index()) {
+                    VertexKind::Frozen
+                } else {
+                    continue;
+                }
+            }
+            _ => VertexKind::Frozen,
+        };
+        for v in [a, b] {
+            if kind[v as usize] != VertexKind::Frozen {
+                kind[v as usize] = k;
+            }
+        }
+    }
+    for (v, k) in kind.iter_mut().enumerate() {
+        if *k != VertexKind::Frozen && crate::validate::fan_count(mesh, topology, v as u32) > 1 {
+            *k = VertexKind::Frozen;
+        }
+    }
+    kind
+}
+
+/// Simplifies `mesh` by edge collapses until a target is met; see the module documentation.
+pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, MeshError> {
+    let started = Instant::now();
+    mesh.check()?;
+    let (prepared, input_vertex, dropped) = prepare(mesh);
+    if prepared.triangles.is_empty() {
+        return Err(MeshError::Empty { what: "no faces" });
+    }
+    let faces_in = prepared.face_count();
+    let target = target_faces(options, faces_in)?;
+    let units = DistanceUnits::new(&prepared.surface_bounds().expect("has faces"));
+    let topology = Topology::new(&prepared);
+    let kind = classify(&prepared, &topology);
+    let vertex_count = prepared.vertex_count();
+
+    let mut state = State {
+        options,
+        positions: prepared.positions.clone(),
+        triangles: prepared.triangles.clone(),
+        face_alive: vec![true; faces_in],
+        vertex_faces: (0..vertex_count).map(|v| topology.vertex_faces.get(v).iter().map(|f| f.0).collect()).collect(),
+        vertex_alive: vec![true; vertex_count],
+        kind,
+        version: vec![0; vertex_count],
+        quadrics: vec![Quadric::default(); vertex_count],
+        normals: vec![DVec3::ZERO; vertex_count],
+        mark: vec![0; vertex_count],
+        mark_stamp: 0,
+        fan_scratch: Vec::new(),
+        cos_max_normal_change: options.max_normal_change_degrees.to_radians().cos(),
+    };
+    if options.boundary == BoundaryMode::Lock {
+        for k in state.kind.iter_mut() {
+            if *k == VertexKind::Boundary {
+                *k = VertexKind::Frozen;
+            }
+        }
+    }
+    // Quadrics: area-weighted face planes, plus boundary planes perpendicular to boundary faces.
+    for (f, t) in prepared.triangles.iter().enumerate() {
+        let [pa, pb, pc] = prepared.triangle_points(f);
+        let n = (pb - pa).cross(pc - pa);
+        let area = 0.5 * n.length();
+        if area == 0.0 {
+            continue;
+        }
+        let q = Quadric::from_plane(n.normalize(), pa, area);
+        for &v in t {
+            state.quadrics[v as usize] += q;
+        }
+    }
+    for (e, &[a, b]) in topology.edges.iter().enumerate() {
+        let faces = topology.edge_faces.get(e);
+        if faces.len() != 1 {
+            continue;
+        }
+        let f = faces[0].index();
+        let [p0, p1, p2] = prepared.triangle_points(f);
+        let face_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        let (pa, pb) = (prepared.point(a), prepared.point(b));
+        let edge = pb - pa;
+        let plane_normal = edge.cross(face_normal).normalize_or_zero();
+        if plane_normal == DVec3::ZERO {
+            continue;
+        }
+        let q = Quadric::constraint(plane_normal, pa, BOUNDARY_WEIGHT * edge.length_squared());
+        state.quadrics[a as usize] += q;
+        state.quadrics[b as usize] += q;
+    }
+    for v in 0..vertex_count as u32 {
+        state.normals[v as usize] = state.fan_normal(v);
+    }
+
+    let mut heap = BinaryHeap::with_capacity(topology.edges.len());
+    for &[a, b] in &topology.edges {
+        state.push_edge(a, b, &mut heap);
+    }
+
+    let mut faces_alive = faces_in;
+    let mut log: Vec<CollapseRecord> = Vec::new();
+    let mut neighbours = Vec::new();
+    let mut rejected = 0;
+    let mut pops = 0usize;
+    let mut passes = 1;
+    let mut collapses_this_pass = 0;
+    let mut max_collapse_error: f64 = 0.0;
+    let stop_reason = loop {
+        if faces_alive <= target {
+            break StopReason::TargetReached;
+        }
+        pops += 1;
+        if pops.is_multiple_of(CANCEL_CHECK_INTERVAL)
+            && let Some(flag) = &options.cancel
+            && flag.load(AtomicOrdering::Relaxed)
+        {
+            return Err(MeshError::Cancelled);
+        }
+        let Some(entry) = heap.pop() else {
+            // Dry before the target: refused candidates may have become legal since.
+            if passes >= MAX_PASSES || collapses_this_pass == 0 {
+                break StopReason::NoLegalCollapse;
+            }
+            passes += 1;
+            collapses_this_pass = 0;
+            for v in 0..vertex_count as u32 {
+                if state.vertex_alive[v as usize] {
+                    neighbours.clear();
+                    state.push_edges_of(v, &mut heap, &mut neighbours);
+                }
+            }
+            continue;
+        };
+        let (a, b) = (entry.a, entry.b);
+        if !state.vertex_alive[a as usize]
+            || !state.vertex_alive[b as usize]
+            || state.version[a as usize] != entry.version_a
+            || state.version[b as usize] != entry.version_b
+        {
+            continue; // stale: an endpoint changed since this entry was queued
+        }
+        let Some(candidate) = state.evaluate(a, b) else { continue };
+        let merged = state.quadrics[a as usize] + state.quadrics[b as usize];
+        let error_paper = units.to_paper(merged.distance(to_f64(candidate.position)));
+        if let Some(limit) = options.max_error
+            && error_paper > limit
+        {
+            break StopReason::MaxErrorReached;
+        }
+        if !state.is_legal(&candidate) {
+            rejected += 1;
+            continue;
+        }
+        let mut record = state.collapse(&candidate);
+        max_collapse_error = max_collapse_error.max(error_paper);
+        record.error = max_collapse_error as f32;
+        faces_alive -= (record.left_face != NONE) as usize + (record.right_face != NONE) as usize;
+        log.push(record);
+        collapses_this_pass += 1;
+        state.push_edges_of(candidate.survivor, &mut heap, &mut neighbours);
+    };
+
+    // Output: surviving vertices and faces in input order.
+    let mut new_index = vec![NONE; vertex_count];
+    let mut positions = Vec::new();
+    for (v, slot) in new_index.iter_mut().enumerate() {
+        if state.vertex_alive[v] && !state.vertex_faces[v].is_empty() {
+            *slot = positions.len() as u32;
+            positions.push(state.positions[v]);
+        }
+    }
+    let triangles: Vec<[u32; 3]> = (0..faces_in)
+        .filter(|&f| state.face_alive[f])
+        .map(|f| state.triangles[f].map(|v| new_index[v as usize]))
+        .collect();
+    let simplified = Mesh { positions, triangles, corners: Default::default() };
+    debug_assert!(simplified.check().is_ok());
+    let progressive = options.record_progressive.then(|| {
+        ProgressiveMesh::from_log(&prepared, &input_vertex, &state.positions, &state.triangles, &state.face_alive, &log)
+    });
+    let frozen_vertices = state.kind.iter().filter(|&&k| k == VertexKind::Frozen).count();
+    let stats = SimplifyStats {
+        faces_in,
+        faces_out: simplified.face_count(),
+        vertices_in: vertex_count,
+        vertices_out: simplified.vertex_count(),
+        target_faces: target,
+        collapses: log.len(),
+        stop_reason,
+        max_collapse_error,
+        rejected,
+        frozen_vertices,
+        dropped_degenerate_faces: dropped,
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    Ok(Simplified { mesh: simplified, progressive, stats })
+}

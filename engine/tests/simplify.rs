@@ -1,0 +1,333 @@
+//! Simplification and progressive meshes: invariants on real and procedural meshes, exact PM
+//! round trips, the `.pm` file, and the cost strategies on drawn cases.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use meshlod_engine::io::read_mesh;
+use meshlod_engine::pm::ProgressiveMesh;
+use meshlod_engine::pm_format::{decode, encode};
+use meshlod_engine::simplify::{BoundaryMode, Metric, Placement, SimplifyOptions, StopReason, prepare, simplify};
+use meshlod_engine::validate::validate;
+use meshlod_engine::{Mesh, MeshError, procedural};
+
+fn options(ratio: f64) -> SimplifyOptions {
+    SimplifyOptions { target_ratio: Some(ratio), record_progressive: true, ..Default::default() }
+}
+
+fn canonical(t: [u32; 3]) -> [u32; 3] {
+    let i = (0..3).min_by_key(|&i| t[i]).unwrap();
+    [t[i], t[(i + 1) % 3], t[(i + 2) % 3]]
+}
+
+/// Refining all the way must give back the prepared input: positions bit for bit, the same faces
+/// with the same orientation (up to rotation).
+fn assert_exact_round_trip(name: &str, input: &Mesh, pm: &ProgressiveMesh) {
+    let (prepared, _, _) = prepare(input);
+    let full = pm.at_level(pm.levels());
+    let map = pm.input_vertex().expect("built by the simplifier");
+    assert_eq!(full.vertex_count(), prepared.vertex_count(), "{name}: vertex count");
+    // prepare() keeps referenced vertices in input order: map input index → prepared index.
+    let mut prepared_of_input = HashMap::new();
+    let mut k = 0;
+    let mut used = vec![false; input.vertex_count()];
+    for t in &input.triangles {
+        if t[0] != t[1] && t[1] != t[2] && t[0] != t[2] {
+            for &v in t {
+                used[v as usize] = true;
+            }
+        }
+    }
+    for (v, &u) in used.iter().enumerate() {
+        if u {
+            prepared_of_input.insert(v as u32, k);
+            k += 1;
+        }
+    }
+    for (v, p) in full.positions.iter().enumerate() {
+        let original = input.positions[map[v] as usize];
+        assert_eq!(p.map(f32::to_bits), original.map(f32::to_bits), "{name}: vertex {v} moved");
+    }
+    let mut got: Vec<[u32; 3]> =
+        full.triangles.iter().map(|t| canonical(t.map(|v| prepared_of_input[&map[v as usize]]))).collect();
+    let mut want: Vec<[u32; 3]> = prepared.triangles.iter().map(|&t| canonical(t)).collect();
+    got.sort_unstable();
+    want.sort_unstable();
+    assert_eq!(got, want, "{name}: faces differ after refining all splits");
+}
+
+/// Output invariants: edge-manifold, no new non-manifold vertices, consistently oriented, no
+/// degenerate faces, boundaries kept, no folded-over face pairs.
+fn assert_valid_output(name: &str, input: &Mesh, output: &Mesh) {
+    let before = validate(input);
+    let after = validate(output);
+    assert_eq!(after.non_manifold_edges, before.non_manifold_edges.min(after.non_manifold_edges), "{name}");
+    if before.non_manifold_edges == 0 {
+        assert_eq!(after.non_manifold_edges, 0, "{name}: non-manifold edge created");
+    }
+    assert!(after.non_manifold_vertices <= before.non_manifold_vertices, "{name}: non-manifold vertex created");
+    if before.inconsistently_oriented_edges == 0 {
+        assert_eq!(after.inconsistently_oriented_edges, 0, "{name}: orientation broken");
+    }
+    assert_eq!(after.degenerate_faces, 0, "{name}: degenerate face created");
+    assert_eq!(after.duplicate_faces, 0, "{name}: duplicate face created");
+    if before.non_manifold_edges == 0 {
+        assert_eq!(after.boundary_loops, before.boundary_loops, "{name}: boundary loops changed");
+    }
+    // With non-manifold edges "loops" are ambiguous; the pieces of the boundary-edge graph are not.
+    assert_eq!(boundary_pieces(output), boundary_pieces(input), "{name}: boundary pieces changed");
+    assert_eq!(after.components, before.components, "{name}: a component vanished or split");
+    // Folded pairs: two faces sharing an edge whose normals point (almost) opposite ways. Scans
+    // may already have some; simplification must not add any.
+    assert!(
+        folded_pairs(output) <= folded_pairs(input),
+        "{name}: {} folded face pairs, input had {}",
+        folded_pairs(output),
+        folded_pairs(input)
+    );
+}
+
+fn folded_pairs(mesh: &Mesh) -> usize {
+    let mut edge_faces: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        for i in 0..3 {
+            let (a, b) = (t[i], t[(i + 1) % 3]);
+            edge_faces.entry((a.min(b), a.max(b))).or_default().push(f);
+        }
+    }
+    let normal = |f: usize| mesh.face_area_vector(f).normalize_or_zero();
+    edge_faces.values().filter(|faces| faces.len() == 2 && normal(faces[0]).dot(normal(faces[1])) < -0.999).count()
+}
+
+/// Connected components of the graph of boundary edges.
+fn boundary_pieces(mesh: &Mesh) -> usize {
+    let topology = meshlod_engine::topology::Topology::new(mesh);
+    let mut sets = meshlod_engine::topology::UnionFind::new(mesh.vertex_count());
+    let mut on_boundary = vec![false; mesh.vertex_count()];
+    for (e, &[a, b]) in topology.edges.iter().enumerate() {
+        if topology.edge_faces.get(e).len() == 1 {
+            sets.union(a, b);
+            on_boundary[a as usize] = true;
+            on_boundary[b as usize] = true;
+        }
+    }
+    let mut roots: Vec<u32> =
+        (0..mesh.vertex_count() as u32).filter(|&v| on_boundary[v as usize]).map(|v| sets.find(v)).collect();
+    roots.sort_unstable();
+    roots.dedup();
+    roots.len()
+}
+
+fn shared(name: &str) -> Option<Mesh> {
+    let dir = meshlod_engine::datasets::require_shared_meshes(name)?;
+    Some(read_mesh(dir.join(format!("{name}.obj"))).unwrap())
+}
+
+#[test]
+fn procedural_meshes_simplify_validly_and_round_trip() {
+    for (name, mesh) in [
+        ("sphere", procedural::icosphere(4)),
+        ("torus", procedural::torus(48, 16, 0.3)),
+        ("box", procedural::sharp_box(8)),
+        ("terrain", procedural::terrain(32, 5)),
+        ("blob", procedural::bumpy_blob(30, 50, 2)),
+    ] {
+        for metric in [Metric::Qfvp { w: 1.0 }, Metric::Qem, Metric::Melax] {
+            let out = simplify(&mesh, &SimplifyOptions { metric, ..options(0.95) }).unwrap();
+            let label = format!("{name}/{}", metric.name());
+            assert_valid_output(&label, &mesh, &out.mesh);
+            assert_exact_round_trip(&label, &mesh, out.progressive.as_ref().unwrap());
+        }
+    }
+}
+
+#[test]
+fn shared_meshes_at_99_percent_stay_valid_and_round_trip() {
+    let Some(dir) = meshlod_engine::datasets::require_shared_meshes("shared_meshes_at_99_percent") else { return };
+    for name in meshlod_engine::datasets::SHARED_MESHES {
+        let mesh = read_mesh(dir.join(format!("{name}.obj"))).unwrap();
+        let out = simplify(&mesh, &options(0.99)).unwrap();
+        let stats = &out.stats;
+        assert!(
+            stats.faces_out as f64 <= (stats.faces_in as f64 * 0.012).max(stats.target_faces as f64 + 2.0)
+                || stats.stop_reason == StopReason::NoLegalCollapse,
+            "{name}: {stats:?}"
+        );
+        assert_valid_output(name, &mesh, &out.mesh);
+        assert_exact_round_trip(name, &mesh, out.progressive.as_ref().unwrap());
+    }
+}
+
+#[test]
+fn at_faces_equals_simplifying_straight_to_that_count() {
+    let Some(mesh) = shared("cow") else { return };
+    let full = simplify(&mesh, &options(0.99)).unwrap();
+    let pm = full.progressive.unwrap();
+    for target in [60, 500, 1161, 2900, 5000] {
+        let straight =
+            simplify(&mesh, &SimplifyOptions { target_faces: Some(target), target_ratio: None, ..options(0.0) })
+                .unwrap()
+                .mesh;
+        let level = pm.at_faces(target);
+        let key = |m: &Mesh| {
+            let mut faces: Vec<[[u32; 3]; 3]> = m
+                .triangles
+                .iter()
+                .map(|t| {
+                    let mut c = t.map(|v| m.positions[v as usize].map(f32::to_bits));
+                    c.sort_unstable();
+                    c
+                })
+                .collect();
+            faces.sort_unstable();
+            faces
+        };
+        assert_eq!(level.face_count(), straight.face_count(), "target {target}");
+        assert_eq!(key(&level), key(&straight), "target {target}: different faces");
+    }
+    // Incremental moves between levels give the same meshes as fresh rebuilds.
+    let mut cursor = pm.cursor();
+    for level in [10, 400, 37, 1200, 1199, 0, pm.levels()] {
+        cursor.seek_level(level).unwrap();
+        assert_eq!(cursor.mesh(), pm.at_level(level), "level {level}");
+    }
+}
+
+#[test]
+fn pm_file_round_trips_and_refuses_corruption() {
+    let mesh = procedural::bumpy_blob(24, 40, 9);
+    for placement in [Placement::Endpoint, Placement::Optimal] {
+        let pm = simplify(&mesh, &SimplifyOptions { placement, ..options(0.97) }).unwrap().progressive.unwrap();
+        let bytes = encode(&pm);
+        let back = decode(&bytes, Path::new("t.pm")).unwrap();
+        assert_eq!(back.base(), pm.base());
+        assert_eq!(back.splits(), pm.splits());
+        assert_eq!(back.at_level(back.levels()), pm.at_level(pm.levels()));
+        let per_split =
+            (bytes.len() - 32 - 12 * (pm.base().vertex_count() + pm.base().face_count())) as f64 / pm.levels() as f64;
+        if placement == Placement::Endpoint {
+            assert!(per_split <= 24.0, "endpoint placement: {per_split} bytes per split");
+        }
+        // Every truncation is refused, never a panic.
+        for cut in [0, 3, 10, 30, bytes.len() / 2, bytes.len() - 1] {
+            assert!(matches!(decode(&bytes[..cut], Path::new("t.pm")), Err(MeshError::Parse { .. })), "cut {cut}");
+        }
+        // Flipped bits anywhere are caught by the checksum or the structural checks.
+        for at in (0..bytes.len()).step_by(97) {
+            let mut bad = bytes.clone();
+            bad[at] ^= 0x10;
+            assert!(decode(&bad, Path::new("t.pm")).is_err(), "flip at {at}");
+        }
+    }
+}
+
+#[test]
+fn cost_strategies_differ_where_they_should() {
+    // On a curved surface QFVP (w > 0) reorders QEM's collapses: an edge whose endpoint normals
+    // agree is cheap whatever its quadric error. Melax ranks by edge length × curvature instead.
+    let torus = procedural::torus(40, 16, 0.3);
+    let run_on = |mesh: &Mesh, metric| {
+        simplify(
+            mesh,
+            &SimplifyOptions {
+                metric,
+                target_faces: Some(200),
+                target_ratio: None,
+                placement: Placement::Paper,
+                ..options(0.0)
+            },
+        )
+        .unwrap()
+    };
+    let run = |metric| run_on(&torus, metric);
+    let qem = run(Metric::Qem);
+    let qfvp0 = run(Metric::Qfvp { w: 0.0 });
+    let qfvp2 = run(Metric::Qfvp { w: 2.0 });
+    let melax = run(Metric::Melax);
+    // QFVP with w = 0 is QEM exactly.
+    assert_eq!(qem.mesh, qfvp0.mesh);
+    assert!(qem.mesh.positions != qfvp2.mesh.positions, "w = 2 must change the order of collapses");
+    assert!(qem.mesh.positions != melax.mesh.positions, "Melax must differ from QEM");
+    // On a box every strategy keeps the 8 corners (collapsing one costs far more than flat edges).
+    let box_mesh = procedural::sharp_box(6);
+    for metric in [Metric::Qem, Metric::Qfvp { w: 2.0 }, Metric::Melax] {
+        let out = run_on(&box_mesh, metric);
+        let name = metric.name();
+        let corners =
+            out.mesh.positions.iter().filter(|p| p[0].abs() == 1.0 && p[1].abs() == 0.5 && p[2].abs() == 0.25).count();
+        assert_eq!(corners, 8, "{name} lost a box corner");
+    }
+}
+
+#[test]
+fn boundaries_are_kept_or_locked() {
+    let mesh = procedural::terrain(24, 3);
+    let locked = simplify(&mesh, &SimplifyOptions { boundary: BoundaryMode::Lock, ..options(0.9) }).unwrap();
+    let border = |m: &Mesh| m.positions.iter().filter(|p| p[0].abs() == 1.0 || p[1].abs() == 1.0).count();
+    assert_eq!(border(&locked.mesh), border(&mesh), "locked boundary vertices must all stay");
+    let preserved = simplify(&mesh, &options(0.9)).unwrap();
+    assert_valid_output("terrain/preserve", &mesh, &preserved.mesh);
+    // Boundary vertices stay on the square's border (their constraint planes hold them there).
+    let report = validate(&preserved.mesh);
+    assert_eq!(report.boundary_loops, 1);
+    let topology = meshlod_engine::topology::Topology::new(&preserved.mesh);
+    for (e, &[a, b]) in topology.edges.iter().enumerate() {
+        if topology.edge_faces.get(e).len() == 1 {
+            for v in [a, b] {
+                let p = preserved.mesh.positions[v as usize];
+                let off = (1.0 - p[0].abs()).min(1.0 - p[1].abs());
+                // Boundary vertices slide along the border; only a cut corner leaves it, slightly.
+                assert!(off.abs() < 0.02, "boundary vertex {v} at {p:?} left the border");
+            }
+        }
+    }
+}
+
+#[test]
+fn bad_options_and_inputs_are_refused() {
+    let mesh = procedural::icosphere(2);
+    let err = |o: SimplifyOptions| simplify(&mesh, &o).unwrap_err();
+    assert!(matches!(
+        err(SimplifyOptions { target_ratio: Some(1.5), ..Default::default() }),
+        MeshError::InvalidParameter { name: "ratio", .. }
+    ));
+    assert!(matches!(
+        err(SimplifyOptions { metric: Metric::Qfvp { w: 3.0 }, ..Default::default() }),
+        MeshError::InvalidParameter { name: "w", .. }
+    ));
+    assert!(matches!(
+        err(SimplifyOptions { max_error: Some(f64::NAN), ..Default::default() }),
+        MeshError::InvalidParameter { .. }
+    ));
+    assert!(matches!(simplify(&Mesh::default(), &SimplifyOptions::default()), Err(MeshError::Empty { .. })));
+    // Non-manifold input: simplified around its frozen parts, not refused, no panic.
+    let mut fin = procedural::icosphere(2);
+    let n = fin.positions.len() as u32;
+    fin.positions.push([0.0, 0.0, 3.0]);
+    let [a, b, _] = fin.triangles[0];
+    fin.triangles.push([a, b, n]);
+    let out = simplify(&fin, &options(0.8)).unwrap();
+    assert!(out.stats.frozen_vertices >= 2);
+    assert_exact_round_trip("fin", &fin, out.progressive.as_ref().unwrap());
+}
+
+#[test]
+fn cancellation_stops_the_work() {
+    let mesh = procedural::icosphere(5);
+    let flag = Arc::new(AtomicBool::new(true));
+    let r = simplify(&mesh, &SimplifyOptions { cancel: Some(flag), ..options(0.99) });
+    assert!(matches!(r, Err(MeshError::Cancelled)));
+}
+
+#[test]
+fn max_error_stops_early_and_errors_are_monotone() {
+    let mesh = procedural::bumpy_blob(40, 60, 4);
+    let out = simplify(&mesh, &SimplifyOptions { max_error: Some(0.002), ..options(0.99) }).unwrap();
+    assert_eq!(out.stats.stop_reason, StopReason::MaxErrorReached);
+    assert!(out.stats.max_collapse_error <= 0.002);
+    let pm = out.progressive.unwrap();
+    // Split order is refinement order: errors never increase along it.
+    assert!(pm.splits().windows(2).all(|w| w[0].error >= w[1].error));
+}
