@@ -279,37 +279,34 @@ struct Candidate {
     position: [f32; 3],
 }
 
-#[derive(Debug, Clone, Copy)]
+/// A queued candidate. `key` packs the cost and the quadric error as `f32` bit patterns (both are
+/// non-negative, so their bits order like the numbers): one integer comparison per heap step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct HeapEntry {
-    cost: f64,
-    error: f64,
+    key: u64,
     a: u32,
     b: u32,
     version_a: u32,
     version_b: u32,
 }
 
-impl PartialEq for HeapEntry {
-    fn eq(&self, other: &Self) -> bool {
-        self.cmp(other) == Ordering::Equal
+impl HeapEntry {
+    fn key(cost: f64, error: f64) -> u64 {
+        let bits = |x: f64| (x.max(0.0) as f32).to_bits() as u64;
+        (bits(cost) << 32) | bits(error)
     }
 }
-impl Eq for HeapEntry {}
+
 impl PartialOrd for HeapEntry {
     fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
         Some(self.cmp(other))
     }
 }
 impl Ord for HeapEntry {
-    /// Reversed so that `BinaryHeap` pops the cheapest; ties broken by error, then by vertex ids so
-    /// the order (and the progressive mesh) is deterministic.
+    /// Reversed so that `BinaryHeap` pops the cheapest; ties broken by error (in the key), then by
+    /// vertex ids so the order (and the progressive mesh) is deterministic.
     fn cmp(&self, other: &Self) -> Ordering {
-        other
-            .cost
-            .total_cmp(&self.cost)
-            .then(other.error.total_cmp(&self.error))
-            .then(other.a.cmp(&self.a))
-            .then(other.b.cmp(&self.b))
+        other.key.cmp(&self.key).then(other.a.cmp(&self.a)).then(other.b.cmp(&self.b))
     }
 }
 
@@ -414,7 +411,14 @@ impl<'o> State<'o> {
                     1.0
                 } else {
                     let cos = self.normals[a as usize].dot(self.normals[b as usize]).clamp(-1.0, 1.0);
-                    (1.0 - cos).powf(w)
+                    let x = 1.0 - cos;
+                    match w {
+                        0.5 => x.sqrt(),
+                        1.0 => x,
+                        1.5 => x * x.sqrt(),
+                        2.0 => x * x,
+                        _ => x.powf(w),
+                    }
                 };
                 let cost_of = |_: DVec3, error: f64| error * factor;
                 // The survivor of a moving collapse: the endpoint that already has more faces,
@@ -660,17 +664,20 @@ impl<'o> State<'o> {
     }
 
     fn push_edge(&self, a: u32, b: u32, heap: &mut BinaryHeap<HeapEntry>) {
-        let (a, b) = (a.min(b), a.max(b));
-        if let Some(c) = self.evaluate(a, b) {
-            heap.push(HeapEntry {
-                cost: c.cost,
-                error: c.error,
-                a,
-                b,
-                version_a: self.version[a as usize],
-                version_b: self.version[b as usize],
-            });
+        if let Some(entry) = self.entry(a, b) {
+            heap.push(entry);
         }
+    }
+
+    fn entry(&self, a: u32, b: u32) -> Option<HeapEntry> {
+        let (a, b) = (a.min(b), a.max(b));
+        self.evaluate(a, b).map(|c| HeapEntry {
+            key: HeapEntry::key(c.cost, c.error),
+            a,
+            b,
+            version_a: self.version[a as usize],
+            version_b: self.version[b as usize],
+        })
     }
 }
 
@@ -840,10 +847,8 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
         state.normals[v as usize] = state.fan_normal(v);
     }
 
-    let mut heap = BinaryHeap::with_capacity(topology.edges.len());
-    for &[a, b] in &topology.edges {
-        state.push_edge(a, b, &mut heap);
-    }
+    // Heapify once (linear) rather than pushing edge by edge.
+    let mut heap: BinaryHeap<HeapEntry> = topology.edges.iter().filter_map(|&[a, b]| state.entry(a, b)).collect();
 
     let mut faces_alive = faces_in;
     let mut log: Vec<CollapseRecord> = Vec::new();

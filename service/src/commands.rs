@@ -7,6 +7,8 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
 use meshlod_engine::io::{read_mesh, write_mesh};
+use meshlod_engine::pm_format::{encode, read_pm};
+use meshlod_engine::simplify::{BoundaryMode, Metric, NormalUpdate, Placement, SimplifyOptions, simplify};
 use meshlod_engine::validate::{clean, validate};
 use meshlod_engine::{Mesh, procedural};
 use serde_json::json;
@@ -76,12 +78,227 @@ enum Command {
         #[arg(long, default_value_t = 64)]
         resolution: u32,
     },
+    /// Simplify by edge collapse (QFVP, QEM or Melax), optionally writing a progressive mesh.
+    Simplify(SimplifyArgs),
+    /// Extract one level of detail from a progressive mesh (.pm).
+    Lod {
+        /// Progressive mesh written by `meshlod simplify --pm`.
+        input: PathBuf,
+        /// Output mesh (.obj or .ply).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// The finest level with at most this many faces.
+        #[arg(long, conflicts_with_all = ["vertices", "max_error"])]
+        faces: Option<usize>,
+        /// The level with this many vertices.
+        #[arg(long, conflicts_with = "max_error")]
+        vertices: Option<usize>,
+        /// The coarsest level whose recorded collapse error is at most this (paper units).
+        #[arg(long)]
+        max_error: Option<f32>,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
     /// Run the main job on a built-in mesh: generate, validate, measure. Needs no files.
     Demo {
         /// Directory to write the demo meshes into (default: a temporary directory).
         #[arg(long)]
         out_dir: Option<PathBuf>,
     },
+}
+
+#[derive(Debug, clap::Args)]
+struct SimplifyArgs {
+    /// Input mesh (.obj or .ply).
+    input: PathBuf,
+    /// Output mesh (.obj or .ply).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Keep at most this many faces.
+    #[arg(long, conflicts_with = "ratio")]
+    faces: Option<usize>,
+    /// Fraction of the faces to remove, as in the paper: 0.9 keeps 10% (default 0.5).
+    #[arg(long)]
+    ratio: Option<f64>,
+    /// Stop before a collapse whose error estimate exceeds this (paper units).
+    #[arg(long)]
+    max_error: Option<f64>,
+    /// Collapse cost.
+    #[arg(long, value_enum, default_value_t = MetricArg::Qfvp)]
+    metric: MetricArg,
+    /// QFVP exponent w in [0, 2] (0 is plain QEM).
+    #[arg(long, default_value_t = 1.0)]
+    w: f64,
+    /// Placement of the merged vertex.
+    #[arg(long, value_enum, default_value_t = PlacementArg::Optimal)]
+    placement: PlacementArg,
+    /// Normal of the merged vertex: the paper's linear estimate or a recompute over its fan.
+    #[arg(long, value_enum, default_value_t = NormalsArg::Linear)]
+    normals: NormalsArg,
+    /// Open boundaries: preserve (slide along the border) or lock (never move).
+    #[arg(long, value_enum, default_value_t = BoundaryArg::Preserve)]
+    boundary: BoundaryArg,
+    /// Largest change of a face normal one collapse may cause, in degrees.
+    #[arg(long, default_value_t = 90.0)]
+    max_normal_change: f64,
+    /// Also write the progressive mesh (base + vertex splits) to this .pm file.
+    #[arg(long)]
+    pm: Option<PathBuf>,
+    /// Measure the Hausdorff distance between input and output.
+    #[arg(long)]
+    hausdorff: bool,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum MetricArg {
+    Qfvp,
+    Qem,
+    Melax,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum PlacementArg {
+    Paper,
+    Optimal,
+    Endpoint,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum NormalsArg {
+    Linear,
+    Recompute,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum BoundaryArg {
+    Preserve,
+    Lock,
+}
+
+impl SimplifyArgs {
+    fn options(&self) -> SimplifyOptions {
+        SimplifyOptions {
+            target_faces: self.faces,
+            target_ratio: if self.faces.is_some() { self.ratio } else { Some(self.ratio.unwrap_or(0.5)) },
+            max_error: self.max_error,
+            metric: match self.metric {
+                MetricArg::Qfvp => Metric::Qfvp { w: self.w },
+                MetricArg::Qem => Metric::Qem,
+                MetricArg::Melax => Metric::Melax,
+            },
+            placement: match self.placement {
+                PlacementArg::Paper => Placement::Paper,
+                PlacementArg::Optimal => Placement::Optimal,
+                PlacementArg::Endpoint => Placement::Endpoint,
+            },
+            normals: match self.normals {
+                NormalsArg::Linear => NormalUpdate::Linear,
+                NormalsArg::Recompute => NormalUpdate::Recompute,
+            },
+            boundary: match self.boundary {
+                BoundaryArg::Preserve => BoundaryMode::Preserve,
+                BoundaryArg::Lock => BoundaryMode::Lock,
+            },
+            max_normal_change_degrees: self.max_normal_change,
+            record_progressive: self.pm.is_some(),
+            cancel: None,
+        }
+    }
+}
+
+fn run_simplify(args: SimplifyArgs) -> Result<()> {
+    let mesh = load(&args.input)?;
+    let options = args.options();
+    let result = simplify(&mesh, &options)?;
+    write_mesh(&args.output, &result.mesh)?;
+    let stats = &result.stats;
+    let mut report = json!({
+        "faces_in": stats.faces_in,
+        "faces_out": stats.faces_out,
+        "vertices_in": stats.vertices_in,
+        "vertices_out": stats.vertices_out,
+        "metric": options.metric.name(),
+        "w": options.metric.w(),
+        "placement": options.placement,
+        "normals": options.normals,
+        "boundary": options.boundary,
+        "collapses": stats.collapses,
+        "stop_reason": stats.stop_reason,
+        "max_collapse_error": stats.max_collapse_error,
+        "frozen_vertices": stats.frozen_vertices,
+        "seconds": stats.seconds,
+    });
+    if let (Some(path), Some(pm)) = (&args.pm, &result.progressive) {
+        let bytes = encode(pm);
+        std::fs::write(path, &bytes).with_context(|| format!("writing {}", path.display()))?;
+        let base_bytes = 12 * (pm.base().vertex_count() + pm.base().face_count());
+        report["pm_bytes"] = json!(bytes.len());
+        report["pm_splits"] = json!(pm.levels());
+        report["bytes_per_split"] =
+            json!((bytes.len().saturating_sub(base_bytes + 32)) as f64 / pm.levels().max(1) as f64);
+    }
+    if args.hausdorff {
+        let d = hausdorff(&mesh, &result.mesh, &HausdorffOptions::default())?;
+        report["hausdorff"] = json!(d.hausdorff);
+        report["mean"] = json!(d.mean);
+        report["rms"] = json!(d.rms);
+        report["hausdorff_diag_pct"] = json!(d.hausdorff_diag_pct);
+        report["samples"] = json!(d.samples);
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!(
+            "{} → {} faces ({} collapses, {:?}) with {} in {:.3} s",
+            stats.faces_in,
+            stats.faces_out,
+            stats.collapses,
+            stats.stop_reason,
+            options.metric.name(),
+            stats.seconds
+        );
+        if let Some(h) = report.get("hausdorff") {
+            println!("hausdorff {h} paper units, mean {}", report["mean"]);
+        }
+        if let Some(b) = report.get("pm_bytes") {
+            println!("progressive mesh: {b} bytes, {} bytes per split", report["bytes_per_split"]);
+        }
+    }
+    Ok(())
+}
+
+fn run_lod(
+    input: &Path,
+    output: &Path,
+    faces: Option<usize>,
+    vertices: Option<usize>,
+    max_error: Option<f32>,
+    json: bool,
+) -> Result<()> {
+    let pm = read_pm(input)?;
+    let level = match (faces, vertices, max_error) {
+        (Some(n), _, _) => pm.level_for_faces(n),
+        (_, Some(n), _) => n.saturating_sub(pm.base().vertex_count()).min(pm.levels()),
+        // Errors do not increase along the splits: refine while the next split's error is above
+        // the tolerance.
+        (_, _, Some(e)) => pm.splits().iter().take_while(|s| s.error > e).count(),
+        _ => bail!("give one of --faces, --vertices or --max-error"),
+    };
+    let mesh = pm.at_level(level);
+    write_mesh(output, &mesh)?;
+    if json {
+        println!(
+            "{}",
+            json!({"level": level, "levels": pm.levels(), "faces": mesh.face_count(), "vertices": mesh.vertex_count()})
+        );
+    } else {
+        println!("level {level} of {}: {} faces, {} vertices", pm.levels(), mesh.face_count(), mesh.vertex_count());
+    }
+    Ok(())
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -163,6 +380,10 @@ pub fn run(cli: Cli) -> Result<()> {
                 bail!("--resolution must be at least 1");
             }
             write_mesh(&output, &generate(shape, resolution))?;
+        }
+        Command::Simplify(args) => run_simplify(args)?,
+        Command::Lod { input, output, faces, vertices, max_error, json } => {
+            run_lod(&input, &output, faces, vertices, max_error, json)?
         }
         Command::Demo { out_dir } => demo(out_dir)?,
     }

@@ -1,0 +1,84 @@
+//! Simplification benchmark: meshlod (QFVP + progressive-mesh records) beside meshoptimizer at the
+//! same target face count, in one process, single-threaded. Prints one standard line per case:
+//! `input → output triangles, error, time, peer time, ratio`, plus throughput and peak memory.
+//!
+//! Run: `cargo bench -p meshlod-engine --bench simplify` (needs the shared meshes; the 2-million
+//! triangle case is procedural). `MESHLOD_BENCH_QUICK=1` runs one repetition.
+
+// The peak-tracking allocator needs `unsafe` (GlobalAlloc); benches only.
+#[allow(unsafe_code)]
+#[path = "common.rs"]
+mod common;
+
+use common::{PeakAlloc, best_of, peak_during};
+use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
+use meshlod_engine::io::read_mesh;
+use meshlod_engine::simplify::{Metric, SimplifyOptions, simplify};
+use meshlod_engine::{Mesh, procedural};
+
+#[global_allocator]
+static ALLOC: PeakAlloc = PeakAlloc;
+
+fn meshopt_simplify(mesh: &Mesh, target_faces: usize) -> Mesh {
+    let bytes: Vec<u8> = mesh.positions.iter().flat_map(|p| p.iter().flat_map(|c| c.to_le_bytes())).collect();
+    let adapter = meshopt::VertexDataAdapter::new(&bytes, 12, 0).expect("valid vertex data");
+    let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+    let out = meshopt::simplify(&indices, &adapter, target_faces * 3, f32::MAX, meshopt::SimplifyOptions::None, None);
+    Mesh::new(mesh.positions.clone(), out.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect()).expect("valid")
+}
+
+fn case(name: &str, mesh: &Mesh, keep: f64, runs: usize, measure_error: bool) {
+    let faces_in = mesh.face_count();
+    let target = ((faces_in as f64) * keep).round() as usize;
+    let options = SimplifyOptions {
+        target_faces: Some(target),
+        target_ratio: None,
+        metric: Metric::Qfvp { w: 1.0 },
+        record_progressive: true,
+        ..Default::default()
+    };
+    let (ours, ours_time) = best_of(runs, || simplify(mesh, &options).expect("simplifies"));
+    let (_, ours_peak) = peak_during(|| simplify(mesh, &options).expect("simplifies"));
+    let (peer, peer_time) = best_of(runs, || meshopt_simplify(mesh, target));
+    let (_, peer_peak) = peak_during(|| meshopt_simplify(mesh, target));
+    let errors = if measure_error {
+        let h = |m: &Mesh| hausdorff(mesh, m, &HausdorffOptions::default()).map(|r| r.hausdorff).unwrap_or(f64::NAN);
+        format!("error {:.5} (peer {:.5}) paper units", h(&ours.mesh), h(&peer))
+    } else {
+        "error not measured".to_string()
+    };
+    println!(
+        "{name}: {faces_in} → {} triangles (peer {}), {errors}, time {:.1} ms, peer {:.1} ms, ratio {:.2}; \
+         {:.2} M input tri/s; peak {:.0} B/input tri (peer {:.0}); {} splits",
+        ours.mesh.face_count(),
+        peer.face_count(),
+        ours_time * 1e3,
+        peer_time * 1e3,
+        ours_time / peer_time,
+        faces_in as f64 / ours_time / 1e6,
+        ours_peak as f64 / faces_in as f64,
+        peer_peak as f64 / faces_in as f64,
+        ours.progressive.as_ref().map_or(0, |p| p.levels()),
+    );
+}
+
+fn main() {
+    // Single-threaded, as the target says (Hausdorff uses rayon; keep it off the timed part).
+    rayon::ThreadPoolBuilder::new().num_threads(1).build_global().ok();
+    let quick = std::env::var_os("MESHLOD_BENCH_QUICK").is_some();
+    let runs = if quick { 1 } else { 3 };
+    match meshlod_engine::datasets::shared_meshes_dir() {
+        Some(dir) => {
+            for name in ["stanford-bunny", "nefertiti", "ogre"] {
+                let mesh = read_mesh(dir.join(format!("{name}.obj"))).expect("shared mesh reads");
+                let (mesh, _, _) = meshlod_engine::simplify::prepare(&mesh);
+                for keep in [0.1, 0.01] {
+                    case(&format!("{name} keep {:.0}%", keep * 100.0), &mesh, keep, runs, true);
+                }
+            }
+        }
+        None => eprintln!("!!! shared meshes not found (set MESHLOD_MESHES): only the procedural case runs !!!"),
+    }
+    let big = procedural::bumpy_blob(1000, 1000, 1);
+    case("procedural blob 2M keep 1%", &big, 0.01, 1, false);
+}
