@@ -4,7 +4,7 @@
 //! Run: `cargo bench -p meshlod-engine --bench hausdorff`.
 
 // The peak-tracking allocator needs `unsafe` (GlobalAlloc); benches only.
-#[allow(unsafe_code)]
+#[allow(unsafe_code, dead_code)]
 #[path = "common.rs"]
 mod common;
 

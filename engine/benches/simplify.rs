@@ -6,7 +6,7 @@
 //! triangle case is procedural). `MESHLOD_BENCH_QUICK=1` runs one repetition.
 
 // The peak-tracking allocator needs `unsafe` (GlobalAlloc); benches only.
-#[allow(unsafe_code)]
+#[allow(unsafe_code, dead_code)]
 #[path = "common.rs"]
 mod common;
 
