@@ -7,7 +7,7 @@
 
 // The peak-tracking allocator needs `unsafe` (GlobalAlloc); benches only.
 #[allow(unsafe_code, dead_code)]
-#[path = "common.rs"]
+#[path = "support/mod.rs"]
 mod common;
 
 use common::{PeakAlloc, best_of, peak_during};
