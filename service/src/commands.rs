@@ -127,8 +127,9 @@ struct SimplifyArgs {
     /// Collapse cost.
     #[arg(long, value_enum, default_value_t = MetricArg::Qfvp)]
     metric: MetricArg,
-    /// QFVP exponent w in [0, 2] (0 is plain QEM).
-    #[arg(long, default_value_t = 1.0)]
+    /// QFVP exponent w in [0, 2] (0 is plain QEM; the lowest error on most shared meshes, see
+    /// docs/simplify-report.md).
+    #[arg(long, default_value_t = 0.0)]
     w: f64,
     /// Placement of the merged vertex.
     #[arg(long, value_enum, default_value_t = PlacementArg::Optimal)]
