@@ -402,24 +402,36 @@ fn demo(out_dir: Option<PathBuf>) -> Result<()> {
     write_mesh(&original_path, &original)?;
     let report = validate(&original);
     println!(
-        "demo mesh: {} vertices, {} faces, manifold and oriented: {}, written to {}",
+        "demo mesh: {} vertices, {} faces, manifold and oriented: {} → {}",
         report.vertices,
         report.faces,
         report.is_manifold_oriented,
         original_path.display()
     );
-    let coarse = procedural::bumpy_blob(30, 60, 7);
-    let coarse_path = dir.join("blob-coarse.ply");
-    write_mesh(&coarse_path, &coarse)?;
-    let started = Instant::now();
-    let distance = hausdorff(&original, &coarse, &HausdorffOptions::default())?;
+    let options = SimplifyOptions { target_ratio: Some(0.9), record_progressive: true, ..Default::default() };
+    let result = simplify(&original, &options)?;
+    let pm = result.progressive.as_ref().expect("asked for");
+    let pm_path = dir.join("blob.pm");
+    let bytes = encode(pm);
+    std::fs::write(&pm_path, &bytes).with_context(|| format!("writing {}", pm_path.display()))?;
+    let base_path = dir.join("blob-base.ply");
+    write_mesh(&base_path, &result.mesh)?;
     println!(
-        "coarse version: {} faces, Hausdorff {:.5} paper units ({:.3}% of diagonal), mean {:.5}, measured in {:.3} s",
-        coarse.face_count(),
-        distance.hausdorff,
-        distance.hausdorff_diag_pct,
-        distance.mean,
-        started.elapsed().as_secs_f64()
+        "simplified 90% with {} (w = {}): {} → {} faces in {:.3} s; progressive mesh {} splits, {} bytes → {}",
+        options.metric.name(),
+        options.metric.w().unwrap_or(0.0),
+        result.stats.faces_in,
+        result.stats.faces_out,
+        result.stats.seconds,
+        pm.levels(),
+        bytes.len(),
+        pm_path.display()
     );
+    println!("level of detail    faces   Hausdorff (paper units)   % of diagonal");
+    for faces in [result.stats.faces_out, 10_000, 25_000, original.face_count()] {
+        let lod = pm.at_faces(faces);
+        let d = hausdorff(&original, &lod, &HausdorffOptions::default())?;
+        println!("  ≤ {faces:>7}    {:>7}   {:>20.6}    {:>10.4}", lod.face_count(), d.hausdorff, d.hausdorff_diag_pct);
+    }
     Ok(())
 }
