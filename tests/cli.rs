@@ -113,3 +113,57 @@ fn demo_runs_without_any_files() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(String::from_utf8_lossy(&out.stdout).contains("Hausdorff"));
 }
+
+#[test]
+fn simplify_pm_lod_chain() {
+    let dir = tempdir("simplify");
+    let input = dir.join("blob.obj");
+    assert!(meshlod(&["generate", "blob", "-o", s(&input), "--resolution", "24"]).status.success());
+    let out = dir.join("low.ply");
+    let pm = dir.join("blob.pm");
+    let report =
+        ok_json(&["simplify", s(&input), "-o", s(&out), "--ratio", "0.9", "--pm", s(&pm), "--hausdorff", "--json"]);
+    for key in
+        ["faces_in", "faces_out", "metric", "w", "seconds", "stop_reason", "hausdorff", "mean", "bytes_per_split"]
+    {
+        assert!(report.get(key).is_some(), "simplify lacks {key}");
+    }
+    assert_eq!(report["stop_reason"], "target_reached");
+    let faces_in = report["faces_in"].as_u64().unwrap();
+    assert!(report["faces_out"].as_u64().unwrap() * 10 <= faces_in + 10);
+    // The progressive mesh rebuilds the original exactly: zero distance at full resolution.
+    let full = dir.join("full.obj");
+    let lod = ok_json(&["lod", s(&pm), "--faces", &faces_in.to_string(), "-o", s(&full), "--json"]);
+    assert_eq!(lod["faces"], faces_in);
+    let d = ok_json(&["hausdorff", s(&input), s(&full), "--json"]);
+    assert_eq!(d["hausdorff"], 0.0);
+    let mid = dir.join("mid.obj");
+    let lod = ok_json(&["lod", s(&pm), "--faces", "1000", "-o", s(&mid), "--json"]);
+    assert!(lod["faces"].as_u64().unwrap() <= 1000 && lod["faces"].as_u64().unwrap() >= 998);
+    // Errors: bad ratio, corrupt .pm.
+    fails_with(&["simplify", s(&input), "-o", s(&out), "--ratio", "1.5"], "ratio");
+    std::fs::write(dir.join("bad.pm"), b"MLPM garbage").unwrap();
+    fails_with(&["lod", s(&dir.join("bad.pm")), "--faces", "10", "-o", s(&mid)], "bad.pm");
+    for metric in ["qem", "melax", "qfvp"] {
+        let r = ok_json(&["simplify", s(&input), "-o", s(&out), "--faces", "500", "--metric", metric, "--json"]);
+        assert_eq!(r["metric"], metric);
+    }
+}
+
+#[test]
+fn refine_both_directions() {
+    let dir = tempdir("refine");
+    let input = dir.join("blob.obj");
+    assert!(meshlod(&["generate", "blob", "-o", s(&input), "--resolution", "20"]).status.success());
+    let out = dir.join("out.obj");
+    let up = ok_json(&["refine", s(&input), "-o", s(&out), "--etc", "1.0", "--json", "--reference", s(&input)]);
+    for key in ["faces_in", "faces_out", "etc", "mode", "seconds", "reference_mean", "reference_max"] {
+        assert!(up.get(key).is_some(), "refine lacks {key}");
+    }
+    assert_eq!(up["mode"], "subdivide");
+    assert!(up["faces_out"].as_u64() > up["faces_in"].as_u64());
+    let down = ok_json(&["refine", s(&input), "-o", s(&out), "--faces", "400", "--json"]);
+    assert_eq!(down["mode"], "simplify");
+    assert!(down["faces_out"].as_u64().unwrap().abs_diff(400) <= 4);
+    fails_with(&["refine", s(&input), "-o", s(&out), "--etc", "1", "--rounds", "0"], "rounds");
+}

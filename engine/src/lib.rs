@@ -15,6 +15,7 @@ pub mod pm;
 pub mod pm_format;
 pub mod procedural;
 pub mod quadric;
+pub mod refine;
 mod rng;
 pub mod simplify;
 pub mod topology;

@@ -244,7 +244,7 @@ pub(crate) const NONE: u32 = u32::MAX;
 
 /// Vertex classification fixed at the start.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum VertexKind {
+pub(crate) enum VertexKind {
     Interior,
     Boundary,
     /// Non-manifold or inconsistently oriented: no collapse touches it.
@@ -252,34 +252,34 @@ enum VertexKind {
 }
 
 /// Mutable state of one run: the algorithm owns it; nothing is left attached to the input mesh.
-struct State<'o> {
-    options: &'o SimplifyOptions,
-    positions: Vec<[f32; 3]>,
-    triangles: Vec<[u32; 3]>,
-    face_alive: Vec<bool>,
-    vertex_faces: Vec<Vec<u32>>,
-    vertex_alive: Vec<bool>,
-    kind: Vec<VertexKind>,
-    version: Vec<u32>,
-    quadrics: Vec<Quadric>,
-    normals: Vec<DVec3>,
+pub(crate) struct State<'o> {
+    pub(crate) options: &'o SimplifyOptions,
+    pub(crate) positions: Vec<[f32; 3]>,
+    pub(crate) triangles: Vec<[u32; 3]>,
+    pub(crate) face_alive: Vec<bool>,
+    pub(crate) vertex_faces: Vec<Vec<u32>>,
+    pub(crate) vertex_alive: Vec<bool>,
+    pub(crate) kind: Vec<VertexKind>,
+    pub(crate) version: Vec<u32>,
+    pub(crate) quadrics: Vec<Quadric>,
+    pub(crate) normals: Vec<DVec3>,
     /// Scratch marks for the link condition.
-    mark: Vec<u32>,
-    mark_stamp: u32,
+    pub(crate) mark: Vec<u32>,
+    pub(crate) mark_stamp: u32,
     /// Scratch for the fold check: the two other corners and the new unit normal of each face.
-    fan_scratch: Vec<([u32; 2], DVec3)>,
-    corner_scratch: Vec<(u32, u32)>,
-    cos_max_normal_change: f64,
+    pub(crate) fan_scratch: Vec<([u32; 2], DVec3)>,
+    pub(crate) corner_scratch: Vec<(u32, u32)>,
+    pub(crate) cos_max_normal_change: f64,
 }
 
 /// A collapse ready to apply: `removed` merges into `survivor`, which moves to `position`.
 #[derive(Debug, Clone, Copy)]
-struct Candidate {
-    cost: f64,
-    error: f64,
-    survivor: u32,
-    removed: u32,
-    position: [f32; 3],
+pub(crate) struct Candidate {
+    pub(crate) cost: f64,
+    pub(crate) error: f64,
+    pub(crate) survivor: u32,
+    pub(crate) removed: u32,
+    pub(crate) position: [f32; 3],
 }
 
 /// A queued candidate. `key` packs the cost and the quadric error as `f32` bit patterns (both are
@@ -331,18 +331,18 @@ fn triangle_quality(a: DVec3, b: DVec3, c: DVec3) -> f64 {
 }
 
 impl<'o> State<'o> {
-    fn point(&self, v: u32) -> DVec3 {
+    pub(crate) fn point(&self, v: u32) -> DVec3 {
         to_f64(self.positions[v as usize])
     }
 
-    fn face_normal(&self, f: u32) -> DVec3 {
+    pub(crate) fn face_normal(&self, f: u32) -> DVec3 {
         let [a, b, c] = self.triangles[f as usize];
         let (pa, pb, pc) = (self.point(a), self.point(b), self.point(c));
         (pb - pa).cross(pc - pa).normalize_or_zero()
     }
 
     /// Mean of the unit normals of the faces around `v` (Gouraud).
-    fn fan_normal(&self, v: u32) -> DVec3 {
+    pub(crate) fn fan_normal(&self, v: u32) -> DVec3 {
         let sum: DVec3 = self.vertex_faces[v as usize].iter().map(|&f| self.face_normal(f)).sum();
         sum.normalize_or_zero()
     }
@@ -364,7 +364,7 @@ impl<'o> State<'o> {
 
     /// The collapse of edge {a, b} the metric prefers, or `None` if the rules forbid every
     /// direction and placement. Geometry-independent rules only; the rest is in `is_legal`.
-    fn evaluate(&self, a: u32, b: u32) -> Option<Candidate> {
+    pub(crate) fn evaluate(&self, a: u32, b: u32) -> Option<Candidate> {
         let (ka, kb) = (self.kind[a as usize], self.kind[b as usize]);
         if ka == VertexKind::Frozen || kb == VertexKind::Frozen {
             return None;
@@ -485,7 +485,7 @@ impl<'o> State<'o> {
     }
 
     /// Link condition, fan size, normal-change and quality checks for a candidate.
-    fn is_legal(&mut self, c: &Candidate) -> bool {
+    pub(crate) fn is_legal(&mut self, c: &Candidate) -> bool {
         let (a, b) = (c.survivor, c.removed);
         let (shared, shared_count) = self.edge_faces(a, b);
         if shared_count == 0 || shared_count > 2 {
@@ -591,7 +591,7 @@ impl<'o> State<'o> {
     }
 
     /// Applies a legal collapse and returns its log record.
-    fn collapse(&mut self, c: &Candidate) -> CollapseRecord {
+    pub(crate) fn collapse(&mut self, c: &Candidate) -> CollapseRecord {
         let (a, b) = (c.survivor, c.removed);
         let (shared, shared_count) = self.edge_faces(a, b);
         let mut record = CollapseRecord {
@@ -682,6 +682,96 @@ impl<'o> State<'o> {
             version_a: self.version[a as usize],
             version_b: self.version[b as usize],
         })
+    }
+}
+
+impl<'o> State<'o> {
+    /// Working state for `mesh` (prepared: no repeated-index faces, no unreferenced vertices):
+    /// vertex classes, area-weighted quadrics with boundary constraint planes, Gouraud normals.
+    pub(crate) fn new(mesh: &Mesh, topology: &Topology, options: &'o SimplifyOptions) -> State<'o> {
+        let kind = classify(mesh, topology);
+        let vertex_count = mesh.vertex_count();
+
+        let mut state = State {
+            options,
+            positions: mesh.positions.clone(),
+            triangles: mesh.triangles.clone(),
+            face_alive: vec![true; mesh.face_count()],
+            vertex_faces: (0..vertex_count)
+                .map(|v| topology.vertex_faces.get(v).iter().map(|f| f.0).collect())
+                .collect(),
+            vertex_alive: vec![true; vertex_count],
+            kind,
+            version: vec![0; vertex_count],
+            quadrics: vec![Quadric::default(); vertex_count],
+            normals: vec![DVec3::ZERO; vertex_count],
+            mark: vec![0; vertex_count],
+            mark_stamp: 0,
+            fan_scratch: Vec::new(),
+            corner_scratch: Vec::new(),
+            cos_max_normal_change: options.max_normal_change_degrees.to_radians().cos(),
+        };
+        if options.boundary == BoundaryMode::Lock {
+            for k in state.kind.iter_mut() {
+                if *k == VertexKind::Boundary {
+                    *k = VertexKind::Frozen;
+                }
+            }
+        }
+        // Quadrics: area-weighted face planes, plus boundary planes perpendicular to boundary faces.
+        for (f, t) in mesh.triangles.iter().enumerate() {
+            let [pa, pb, pc] = mesh.triangle_points(f);
+            let n = (pb - pa).cross(pc - pa);
+            let area = 0.5 * n.length();
+            if area == 0.0 {
+                continue;
+            }
+            let q = Quadric::from_plane(n.normalize(), pa, area);
+            for &v in t {
+                state.quadrics[v as usize] += q;
+            }
+        }
+        for (e, &[a, b]) in topology.edges.iter().enumerate() {
+            let faces = topology.edge_faces.get(e);
+            if faces.len() != 1 {
+                continue;
+            }
+            let f = faces[0].index();
+            let [p0, p1, p2] = mesh.triangle_points(f);
+            let face_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+            let (pa, pb) = (mesh.point(a), mesh.point(b));
+            let edge = pb - pa;
+            let plane_normal = edge.cross(face_normal).normalize_or_zero();
+            if plane_normal == DVec3::ZERO {
+                continue;
+            }
+            let q = Quadric::constraint(plane_normal, pa, BOUNDARY_WEIGHT * edge.length_squared());
+            state.quadrics[a as usize] += q;
+            state.quadrics[b as usize] += q;
+        }
+        for v in 0..vertex_count as u32 {
+            state.normals[v as usize] = state.fan_normal(v);
+        }
+        state
+    }
+
+    /// The surviving mesh: live vertices in input order, live faces in input order.
+    pub(crate) fn output_mesh(&self) -> Mesh {
+        let mut new_index = vec![NONE; self.positions.len()];
+        let mut positions = Vec::new();
+        for (v, slot) in new_index.iter_mut().enumerate() {
+            if self.vertex_alive[v] && !self.vertex_faces[v].is_empty() {
+                *slot = positions.len() as u32;
+                positions.push(self.positions[v]);
+            }
+        }
+        let triangles: Vec<[u32; 3]> = (0..self.triangles.len())
+            .filter(|&f| self.face_alive[f])
+            .map(|f| self.triangles[f].map(|v| new_index[v as usize]))
+            .collect();
+        let mesh = Mesh { positions, triangles, corners: Default::default() };
+        debug_assert!(mesh.check().is_ok());
+        mesh
     }
 }
 
@@ -790,67 +880,8 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     let target = target_faces(options, faces_in)?;
     let units = DistanceUnits::new(&prepared.surface_bounds().expect("has faces"));
     let topology = Topology::new(&prepared);
-    let kind = classify(&prepared, &topology);
+    let mut state = State::new(&prepared, &topology, options);
     let vertex_count = prepared.vertex_count();
-
-    let mut state = State {
-        options,
-        positions: prepared.positions.clone(),
-        triangles: prepared.triangles.clone(),
-        face_alive: vec![true; faces_in],
-        vertex_faces: (0..vertex_count).map(|v| topology.vertex_faces.get(v).iter().map(|f| f.0).collect()).collect(),
-        vertex_alive: vec![true; vertex_count],
-        kind,
-        version: vec![0; vertex_count],
-        quadrics: vec![Quadric::default(); vertex_count],
-        normals: vec![DVec3::ZERO; vertex_count],
-        mark: vec![0; vertex_count],
-        mark_stamp: 0,
-        fan_scratch: Vec::new(),
-        corner_scratch: Vec::new(),
-        cos_max_normal_change: options.max_normal_change_degrees.to_radians().cos(),
-    };
-    if options.boundary == BoundaryMode::Lock {
-        for k in state.kind.iter_mut() {
-            if *k == VertexKind::Boundary {
-                *k = VertexKind::Frozen;
-            }
-        }
-    }
-    // Quadrics: area-weighted face planes, plus boundary planes perpendicular to boundary faces.
-    for (f, t) in prepared.triangles.iter().enumerate() {
-        let [pa, pb, pc] = prepared.triangle_points(f);
-        let n = (pb - pa).cross(pc - pa);
-        let area = 0.5 * n.length();
-        if area == 0.0 {
-            continue;
-        }
-        let q = Quadric::from_plane(n.normalize(), pa, area);
-        for &v in t {
-            state.quadrics[v as usize] += q;
-        }
-    }
-    for (e, &[a, b]) in topology.edges.iter().enumerate() {
-        let faces = topology.edge_faces.get(e);
-        if faces.len() != 1 {
-            continue;
-        }
-        let f = faces[0].index();
-        let [p0, p1, p2] = prepared.triangle_points(f);
-        let face_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
-        let (pa, pb) = (prepared.point(a), prepared.point(b));
-        let edge = pb - pa;
-        let plane_normal = edge.cross(face_normal).normalize_or_zero();
-        if plane_normal == DVec3::ZERO {
-            continue;
-        }
-        let q = Quadric::constraint(plane_normal, pa, BOUNDARY_WEIGHT * edge.length_squared());
-        state.quadrics[a as usize] += q;
-        state.quadrics[b as usize] += q;
-    }
-    for v in 0..vertex_count as u32 {
-        state.normals[v as usize] = state.fan_normal(v);
-    }
 
     // Heapify once (linear) rather than pushing edge by edge.
     let mut heap: BinaryHeap<HeapEntry> = topology.edges.iter().filter_map(|&[a, b]| state.entry(a, b)).collect();
@@ -918,21 +949,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
         state.push_edges_of(candidate.survivor, &mut heap, &mut neighbours);
     };
 
-    // Output: surviving vertices and faces in input order.
-    let mut new_index = vec![NONE; vertex_count];
-    let mut positions = Vec::new();
-    for (v, slot) in new_index.iter_mut().enumerate() {
-        if state.vertex_alive[v] && !state.vertex_faces[v].is_empty() {
-            *slot = positions.len() as u32;
-            positions.push(state.positions[v]);
-        }
-    }
-    let triangles: Vec<[u32; 3]> = (0..faces_in)
-        .filter(|&f| state.face_alive[f])
-        .map(|f| state.triangles[f].map(|v| new_index[v as usize]))
-        .collect();
-    let simplified = Mesh { positions, triangles, corners: Default::default() };
-    debug_assert!(simplified.check().is_ok());
+    let simplified = state.output_mesh();
     let progressive = options.record_progressive.then(|| {
         ProgressiveMesh::from_log(&prepared, &input_vertex, &state.positions, &state.triangles, &state.face_alive, &log)
     });

@@ -236,9 +236,12 @@ fn count_boundary_loops(mesh: &Mesh, topology: &Topology) -> usize {
         loop {
             used.insert(at, true);
             let v = tris[at.0 as usize][(at.1 as usize + 1) % 3];
-            let next = next_in_fan(at.0, at.1)
-                .filter(|n| !used[n])
-                .or_else(|| outgoing.get(&v).and_then(|list| list.iter().copied().find(|n| !used[n])));
+            // Through the fan when it is well defined (a used half-edge there closes the loop);
+            // otherwise any unused boundary half-edge leaving v.
+            let next = match next_in_fan(at.0, at.1) {
+                Some(n) => (!used[&n]).then_some(n),
+                None => outgoing.get(&v).and_then(|list| list.iter().copied().find(|n| !used[n])),
+            };
             match next {
                 Some(n) => at = n,
                 None => break,

@@ -1,0 +1,170 @@
+//! Energy-driven triangle collapse: the faces of lowest energy are merged into single vertices,
+//! lowest first, while their energy is below the threshold.
+//!
+//! A triangle collapse {a, b, c} → p is done as two edge collapses through the simplifier's state
+//! (`crate::simplify`), so it passes the same legality checks: link condition, no flip or fold,
+//! no needle, boundaries kept. The first collapses the triangle's cheapest legal edge at its
+//! quadric-optimal point, which already removes the triangle; the second merges the third vertex
+//! at the quadric-optimal point of all three (the sum of their quadrics): the point nearest, in
+//! the least-squares sense, to the planes of the original faces around them — unlike the
+//! centroid, it does not shrink curved regions. If the second collapse is illegal the triangle is
+//! still gone (as an edge collapse). Faces with two or more boundary vertices are left alone.
+//!
+//! Energies are kept per vertex and updated locally: a collapse changes the positions and edges
+//! of the merged vertex, so the mean edge lengths of it and its neighbours change, and with them
+//! the energies of its two-ring.
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+use super::energy::vertex_energy;
+use crate::error::MeshError;
+use crate::mesh::Mesh;
+use crate::simplify::{BoundaryMode, Metric, Placement, SimplifyOptions, State, VertexKind};
+use crate::topology::Topology;
+
+/// How often (in queue pops) the cancel flag is read.
+const CANCEL_CHECK_INTERVAL: usize = 256;
+
+/// What a coarsening run did.
+#[derive(Debug, Clone)]
+pub(crate) struct Coarsened {
+    pub mesh: Mesh,
+    pub collapses: usize,
+    /// Energy of every face popped, in order (the threshold of an ETC run stops at the first one
+    /// at or above it).
+    pub popped: Vec<f64>,
+}
+
+fn neighbours(state: &State, v: u32, out: &mut Vec<u32>) {
+    out.clear();
+    for &f in &state.vertex_faces[v as usize] {
+        for u in state.triangles[f as usize] {
+            if u != v {
+                out.push(u);
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+}
+
+fn mean_edge_length(state: &State, v: u32, scratch: &mut Vec<u32>) -> f64 {
+    neighbours(state, v, scratch);
+    if scratch.is_empty() {
+        return 0.0;
+    }
+    let p = state.point(v);
+    scratch.iter().map(|&u| (state.point(u) - p).length()).sum::<f64>() / scratch.len() as f64
+}
+
+/// Collapses faces in increasing energy while their energy is below `threshold` (absolute) and
+/// more than `target_faces` faces remain.
+pub(crate) fn coarsen(
+    mesh: &Mesh,
+    threshold: f64,
+    target_faces: usize,
+    cancel: Option<&std::sync::atomic::AtomicBool>,
+) -> Result<Coarsened, MeshError> {
+    let options = SimplifyOptions {
+        metric: Metric::Qem,
+        placement: Placement::Optimal,
+        boundary: BoundaryMode::Preserve,
+        ..Default::default()
+    };
+    let topology = Topology::new(mesh);
+    let mut state = State::new(mesh, &topology, &options);
+    let vertex_count = mesh.vertex_count();
+    let mut scratch = Vec::new();
+    let mut mean_length: Vec<f64> =
+        (0..vertex_count as u32).map(|v| mean_edge_length(&state, v, &mut scratch)).collect();
+    let energy_of = |state: &State, mean_length: &[f64], v: u32, scratch: &mut Vec<u32>| {
+        neighbours(state, v, scratch);
+        vertex_energy(state.point(v), scratch.iter().map(|&u| (state.point(u), mean_length[u as usize])))
+    };
+    let mut energy: Vec<f64> =
+        (0..vertex_count as u32).map(|v| energy_of(&state, &mean_length, v, &mut scratch)).collect();
+    let face_energy = |state: &State, energy: &[f64], f: u32| -> f64 {
+        state.triangles[f as usize].iter().map(|&v| energy[v as usize]).sum()
+    };
+    let mut face_version = vec![0u32; mesh.face_count()];
+    let key = |e: f64| Reverse(e.max(0.0).to_bits());
+    let mut heap: BinaryHeap<(Reverse<u64>, Reverse<u32>, u32)> =
+        (0..mesh.face_count() as u32).map(|f| (key(face_energy(&state, &energy, f)), Reverse(f), 0)).collect();
+
+    let mut faces_alive = mesh.face_count();
+    let mut collapses = 0;
+    let mut popped = Vec::new();
+    let mut pops = 0usize;
+    let mut ring1 = Vec::new();
+    let mut ring2 = Vec::new();
+    let mut touched: Vec<u32> = Vec::new();
+    while faces_alive > target_faces {
+        pops += 1;
+        if pops.is_multiple_of(CANCEL_CHECK_INTERVAL)
+            && cancel.is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed))
+        {
+            return Err(MeshError::Cancelled);
+        }
+        let Some((Reverse(bits), Reverse(f), version)) = heap.pop() else { break };
+        if !state.face_alive[f as usize] || version != face_version[f as usize] {
+            continue;
+        }
+        let e = f64::from_bits(bits);
+        if e >= threshold {
+            break;
+        }
+        popped.push(e);
+        let t = state.triangles[f as usize];
+        let kinds = t.map(|v| state.kind[v as usize]);
+        if kinds.contains(&VertexKind::Frozen) || kinds.iter().filter(|&&k| k == VertexKind::Boundary).count() >= 2 {
+            continue;
+        }
+        // Step 1: the cheapest legal edge of the triangle.
+        let mut candidates: Vec<_> =
+            [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])].iter().filter_map(|&(x, y)| state.evaluate(x, y)).collect();
+        candidates.sort_by(|x, y| x.cost.total_cmp(&y.cost));
+        let Some(first) = candidates.into_iter().find(|c| state.is_legal(c)) else { continue };
+        let third = *t.iter().find(|&&v| v != first.survivor && v != first.removed).expect("three");
+        let record = state.collapse(&first);
+        faces_alive -= (record.left_face != u32::MAX) as usize + (record.right_face != u32::MAX) as usize;
+        collapses += 1;
+        let mut survivor = first.survivor;
+        // Step 2: merge the third vertex at the optimum of all three quadrics.
+        if faces_alive > target_faces
+            && state.vertex_alive[third as usize]
+            && let Some(second) = state.evaluate(survivor.min(third), survivor.max(third))
+            && state.is_legal(&second)
+        {
+            let record = state.collapse(&second);
+            faces_alive -= (record.left_face != u32::MAX) as usize + (record.right_face != u32::MAX) as usize;
+            collapses += 1;
+            survivor = second.survivor;
+        }
+        // Local energy update: mean lengths of the survivor and its ring, energies of the 2-ring.
+        neighbours(&state, survivor, &mut ring1);
+        touched.clear();
+        touched.push(survivor);
+        touched.extend_from_slice(&ring1);
+        for &v in &touched {
+            mean_length[v as usize] = mean_edge_length(&state, v, &mut scratch);
+        }
+        for &v in &ring1 {
+            neighbours(&state, v, &mut ring2);
+            touched.extend_from_slice(&ring2);
+        }
+        touched.sort_unstable();
+        touched.dedup();
+        for &v in &touched {
+            energy[v as usize] = energy_of(&state, &mean_length, v, &mut scratch);
+        }
+        for &v in &touched {
+            for i in 0..state.vertex_faces[v as usize].len() {
+                let g = state.vertex_faces[v as usize][i];
+                face_version[g as usize] = face_version[g as usize].wrapping_add(1);
+                heap.push((key(face_energy(&state, &energy, g)), Reverse(g), face_version[g as usize]));
+            }
+        }
+    }
+    Ok(Coarsened { mesh: state.output_mesh(), collapses, popped })
+}
