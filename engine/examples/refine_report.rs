@@ -51,7 +51,7 @@ fn main() {
         let n = original.face_count();
         let coarse = decimate(&original, n / 4);
         let measure = |m: &Mesh| hausdorff(&original, m, &HausdorffOptions::default()).expect("measures");
-        let mut row = |label: &str, m: &Mesh| {
+        let row = |label: &str, m: &Mesh| {
             let d = measure(m);
             println!("| {name} | {label} | {} | {:.6} | {:.6} |", m.face_count(), d.mean, d.hausdorff);
         };
