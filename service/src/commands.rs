@@ -103,6 +103,12 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Run the gRPC server (meshlod.v1.MeshLod, health, reflection, metrics).
+    Serve(crate::remote::ServeArgs),
+    /// Call a meshlod server: the same operations and flags as the local commands.
+    Client(crate::remote::ClientArgs),
+    /// Run many jobs from a manifest (JSON lines), locally or against a server.
+    Batch(crate::batch::BatchArgs),
     /// Run the main job on a built-in mesh: generate, validate, measure. Needs no files.
     Demo {
         /// Directory to write the demo meshes into (default: a temporary directory).
@@ -111,87 +117,108 @@ enum Command {
     },
 }
 
-#[derive(Debug, clap::Args)]
-struct SimplifyArgs {
+#[derive(Debug, Clone, clap::Args)]
+pub(crate) struct SimplifyArgs {
     /// Input mesh (.obj or .ply).
-    input: PathBuf,
+    pub(crate) input: PathBuf,
     /// Output mesh (.obj or .ply).
     #[arg(short, long)]
-    output: PathBuf,
+    pub(crate) output: PathBuf,
     /// Keep at most this many faces.
     #[arg(long, conflicts_with = "ratio")]
-    faces: Option<usize>,
+    pub(crate) faces: Option<usize>,
     /// Fraction of the faces to remove, as in the paper: 0.9 keeps 10% (default 0.5).
     #[arg(long)]
-    ratio: Option<f64>,
+    pub(crate) ratio: Option<f64>,
     /// Stop before a collapse whose error estimate exceeds this (paper units).
     #[arg(long)]
-    max_error: Option<f64>,
+    pub(crate) max_error: Option<f64>,
     /// Collapse cost.
     #[arg(long, value_enum, default_value_t = MetricArg::Qfvp)]
-    metric: MetricArg,
+    pub(crate) metric: MetricArg,
     /// QFVP exponent w in [0, 2] (0 is plain QEM; the lowest error on most shared meshes, see
     /// docs/simplify-report.md).
     #[arg(long, default_value_t = 0.0)]
-    w: f64,
+    pub(crate) w: f64,
     /// Placement of the merged vertex.
     #[arg(long, value_enum, default_value_t = PlacementArg::Optimal)]
-    placement: PlacementArg,
+    pub(crate) placement: PlacementArg,
     /// Normal of the merged vertex: the paper's linear estimate or a recompute over its fan.
     #[arg(long, value_enum, default_value_t = NormalsArg::Linear)]
-    normals: NormalsArg,
+    pub(crate) normals: NormalsArg,
     /// Open boundaries: preserve (slide along the border) or lock (never move).
     #[arg(long, value_enum, default_value_t = BoundaryArg::Preserve)]
-    boundary: BoundaryArg,
+    pub(crate) boundary: BoundaryArg,
     /// Largest change of a face normal one collapse may cause, in degrees.
     #[arg(long, default_value_t = 90.0)]
-    max_normal_change: f64,
+    pub(crate) max_normal_change: f64,
     /// Also write the progressive mesh (base + vertex splits) to this .pm file.
     #[arg(long)]
-    pm: Option<PathBuf>,
+    pub(crate) pm: Option<PathBuf>,
     /// Measure the Hausdorff distance between input and output.
     #[arg(long)]
-    hausdorff: bool,
+    pub(crate) hausdorff: bool,
     /// Print one JSON object instead of text.
     #[arg(long)]
-    json: bool,
+    pub(crate) json: bool,
 }
 
-#[derive(Debug, clap::Args)]
-struct RefineArgs {
+#[derive(Debug, Clone, clap::Args)]
+pub(crate) struct RefineArgs {
     /// Input mesh (.obj or .ply).
-    input: PathBuf,
+    pub(crate) input: PathBuf,
     /// Output mesh (.obj or .ply).
     #[arg(short, long)]
-    output: PathBuf,
+    pub(crate) output: PathBuf,
     /// Energy threshold coefficient: threshold = ETC × mean face energy.
     #[arg(long, required_unless_present = "faces", conflicts_with = "faces")]
-    etc: Option<f64>,
+    pub(crate) etc: Option<f64>,
     /// Target face count; the ETC reaching it is searched and reported.
     #[arg(long)]
-    faces: Option<usize>,
+    pub(crate) faces: Option<usize>,
     /// What to do (default: subdivide, or with --faces whichever direction reaches the target).
     #[arg(long, value_enum)]
-    mode: Option<ModeArg>,
+    pub(crate) mode: Option<ModeArg>,
     /// Subdivision rounds.
     #[arg(long, default_value_t = 1)]
-    rounds: u32,
+    pub(crate) rounds: u32,
     /// Measure the Metro error of the output against this reference mesh.
     #[arg(long)]
-    reference: Option<PathBuf>,
+    pub(crate) reference: Option<PathBuf>,
     /// Print one JSON object instead of text.
     #[arg(long)]
-    json: bool,
+    pub(crate) json: bool,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
-enum ModeArg {
+pub(crate) enum ModeArg {
     Simplify,
     Subdivide,
     Both,
 }
 
-fn run_refine(args: RefineArgs) -> Result<()> {
+pub(crate) fn run_refine(args: RefineArgs) -> Result<()> {
+    let report = refine_report(&args)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!(
+            "{}: {} → {} faces with ETC {:.4} in {:.3} s",
+            report["mode"],
+            report["faces_in"],
+            report["faces_out"],
+            report["etc"].as_f64().unwrap_or(0.0),
+            report["seconds"].as_f64().unwrap_or(0.0)
+        );
+        if let Some(m) = report.get("reference_mean") {
+            println!("against the reference: mean {m}, max {} (paper units)", report["reference_max"]);
+        }
+    }
+    Ok(())
+}
+
+/// Runs a local refinement and returns its JSON report.
+pub(crate) fn refine_report(args: &RefineArgs) -> Result<serde_json::Value> {
     let mesh = load(&args.input)?;
     let mode = match (args.mode, args.faces) {
         (Some(ModeArg::Simplify), _) => RefineMode::Simplify,
@@ -223,48 +250,37 @@ fn run_refine(args: RefineArgs) -> Result<()> {
         report["reference_mean_diag_pct"] = json!(d.mean_diag_pct);
         report["reference_max_diag_pct"] = json!(d.hausdorff_diag_pct);
     }
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        println!(
-            "{:?}: {} → {} faces with ETC {:.4} in {:.3} s",
-            stats.mode, stats.faces_in, stats.faces_out, stats.etc, stats.seconds
-        );
-        if let Some(m) = report.get("reference_mean") {
-            println!("against the reference: mean {m}, max {} (paper units)", report["reference_max"]);
-        }
-    }
-    Ok(())
+    Ok(report)
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
-enum MetricArg {
+pub(crate) enum MetricArg {
     Qfvp,
     Qem,
     Melax,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
-enum PlacementArg {
+pub(crate) enum PlacementArg {
     Paper,
     Optimal,
     Endpoint,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
-enum NormalsArg {
+pub(crate) enum NormalsArg {
     Linear,
     Recompute,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
-enum BoundaryArg {
+pub(crate) enum BoundaryArg {
     Preserve,
     Lock,
 }
 
 impl SimplifyArgs {
-    fn options(&self) -> SimplifyOptions {
+    pub(crate) fn options(&self) -> SimplifyOptions {
         SimplifyOptions {
             target_faces: self.faces,
             target_ratio: if self.faces.is_some() { self.ratio } else { Some(self.ratio.unwrap_or(0.5)) },
@@ -294,7 +310,32 @@ impl SimplifyArgs {
     }
 }
 
-fn run_simplify(args: SimplifyArgs) -> Result<()> {
+pub(crate) fn run_simplify(args: SimplifyArgs) -> Result<()> {
+    let report = simplify_report(&args)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!(
+            "{} → {} faces ({} collapses, {}) with {} in {:.3} s",
+            report["faces_in"],
+            report["faces_out"],
+            report["collapses"],
+            report["stop_reason"],
+            report["metric"],
+            report["seconds"].as_f64().unwrap_or(0.0)
+        );
+        if let Some(h) = report.get("hausdorff") {
+            println!("hausdorff {h} paper units, mean {}", report["mean"]);
+        }
+        if let Some(b) = report.get("pm_bytes") {
+            println!("progressive mesh: {b} bytes, {} bytes per split", report["bytes_per_split"]);
+        }
+    }
+    Ok(())
+}
+
+/// Runs a local simplification and returns its JSON report.
+pub(crate) fn simplify_report(args: &SimplifyArgs) -> Result<serde_json::Value> {
     let mesh = load(&args.input)?;
     let options = args.options();
     let result = simplify(&mesh, &options)?;
@@ -333,26 +374,7 @@ fn run_simplify(args: SimplifyArgs) -> Result<()> {
         report["hausdorff_diag_pct"] = json!(d.hausdorff_diag_pct);
         report["samples"] = json!(d.samples);
     }
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        println!(
-            "{} → {} faces ({} collapses, {:?}) with {} in {:.3} s",
-            stats.faces_in,
-            stats.faces_out,
-            stats.collapses,
-            stats.stop_reason,
-            options.metric.name(),
-            stats.seconds
-        );
-        if let Some(h) = report.get("hausdorff") {
-            println!("hausdorff {h} paper units, mean {}", report["mean"]);
-        }
-        if let Some(b) = report.get("pm_bytes") {
-            println!("progressive mesh: {b} bytes, {} bytes per split", report["bytes_per_split"]);
-        }
-    }
-    Ok(())
+    Ok(report)
 }
 
 fn run_lod(
@@ -406,6 +428,23 @@ fn generate(shape: Shape, resolution: u32) -> Mesh {
 
 fn load(path: &Path) -> Result<Mesh> {
     Ok(read_mesh(path)?)
+}
+
+/// One batch job, parsed with the same flags as the command line.
+#[derive(Debug, Clone)]
+pub(crate) enum Job {
+    Simplify(SimplifyArgs),
+    Refine(RefineArgs),
+}
+
+/// Parses `meshlod OP INPUT -o OUTPUT ARGS…` into a job.
+pub(crate) fn parse_job(op: &str, input: &str, output: &str, args: &[String]) -> Result<Job> {
+    let argv = ["meshlod", op, input, "-o", output].into_iter().map(String::from).chain(args.iter().cloned());
+    match Cli::try_parse_from(argv).map_err(|e| anyhow::anyhow!("{}", e.render().to_string().trim()))?.command {
+        Command::Simplify(a) => Ok(Job::Simplify(a)),
+        Command::Refine(a) => Ok(Job::Refine(a)),
+        _ => bail!("op must be simplify or refine, not {op}"),
+    }
 }
 
 /// Runs one parsed command line.
@@ -470,6 +509,9 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Lod { input, output, faces, vertices, max_error, json } => {
             run_lod(&input, &output, faces, vertices, max_error, json)?
         }
+        Command::Serve(args) => crate::remote::serve(args)?,
+        Command::Client(args) => crate::remote::client(args)?,
+        Command::Batch(args) => crate::batch::run(args)?,
         Command::Demo { out_dir } => demo(out_dir)?,
     }
     Ok(())

@@ -3,7 +3,9 @@
 //! Every subcommand validates its input, calls the engine, and prints a human summary or, with
 //! `--json`, one JSON object on stdout. Errors go to stderr with a non-zero exit code.
 
+mod batch;
 mod commands;
+mod remote;
 
 use std::process::ExitCode;
 

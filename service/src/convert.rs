@@ -1,0 +1,232 @@
+//! Conversions between the gRPC contract and the engine, with field-level validation.
+//!
+//! Every refusal is `INVALID_ARGUMENT` whose message starts with the field path, so a client can
+//! point at the exact value: `input.mesh.indices[7]: vertex 912 out of range (300 vertices)`.
+
+use std::path::Path;
+
+use meshlod_engine::io::{MeshFormat, ReadLimits, read_mesh_bytes};
+use meshlod_engine::pm::{NO_VERTEX, ProgressiveMesh, VertexSplit};
+use meshlod_engine::simplify::{BoundaryMode, Metric, NormalUpdate, Placement, SimplifyOptions};
+use meshlod_engine::{Mesh, MeshError};
+use tonic::Status;
+
+use crate::proto;
+
+/// Size limits applied to every mesh a request carries.
+#[derive(Debug, Clone, Copy)]
+pub struct MeshLimits {
+    /// Largest number of faces accepted.
+    pub max_faces: usize,
+    /// Largest number of vertices accepted.
+    pub max_vertices: usize,
+}
+
+impl Default for MeshLimits {
+    /// 10 million faces and vertices: well above the 2-million-triangle meshes the service is
+    /// sized for, well below what exhausts a pod's memory.
+    fn default() -> Self {
+        MeshLimits { max_faces: 10_000_000, max_vertices: 10_000_000 }
+    }
+}
+
+fn invalid(field: impl AsRef<str>, message: impl AsRef<str>) -> Status {
+    Status::invalid_argument(format!("{}: {}", field.as_ref(), message.as_ref()))
+}
+
+/// Maps an engine error onto a gRPC status, naming the request field it concerns.
+pub fn engine_status(error: MeshError, options_field: &str) -> Status {
+    match error {
+        MeshError::Cancelled => Status::cancelled("request cancelled"),
+        MeshError::InvalidParameter { name, reason } => invalid(format!("{options_field}.{name}"), reason),
+        MeshError::TooLarge { .. } => invalid("input", error.to_string()),
+        MeshError::Empty { .. }
+        | MeshError::NonFiniteCoordinate { .. }
+        | MeshError::IndexOutOfRange { .. }
+        | MeshError::Parse { .. }
+        | MeshError::UnsupportedFormat { .. } => invalid("input", error.to_string()),
+        MeshError::Io { .. } => Status::internal(error.to_string()),
+    }
+}
+
+/// Reads the mesh of a request, checking sizes, indices and coordinates.
+pub fn mesh_from_input(input: Option<&proto::MeshInput>, field: &str, limits: &MeshLimits) -> Result<Mesh, Status> {
+    let source =
+        input.and_then(|i| i.source.as_ref()).ok_or_else(|| invalid(field, "missing: give a mesh or a file"))?;
+    match source {
+        proto::mesh_input::Source::Mesh(m) => mesh_from_proto(m, &format!("{field}.mesh"), limits),
+        proto::mesh_input::Source::File(file) => {
+            let format = match proto::MeshFormat::try_from(file.format) {
+                Ok(proto::MeshFormat::Obj) => Some(MeshFormat::Obj),
+                Ok(proto::MeshFormat::Ply) => Some(MeshFormat::Ply),
+                Ok(proto::MeshFormat::Unspecified) => None,
+                Err(_) => {
+                    return Err(invalid(format!("{field}.file.format"), format!("unknown format {}", file.format)));
+                }
+            };
+            let read_limits =
+                ReadLimits { max_vertices: limits.max_vertices as u64, max_faces: limits.max_faces as u64 };
+            let mesh = read_mesh_bytes(&file.data, format, Path::new("request"), &read_limits)
+                .map_err(|e| invalid(format!("{field}.file"), e.to_string()))?;
+            if mesh.triangles.is_empty() {
+                return Err(invalid(format!("{field}.file"), "the mesh has no faces"));
+            }
+            Ok(mesh)
+        }
+    }
+}
+
+/// Checks and converts a contract mesh.
+pub fn mesh_from_proto(m: &proto::Mesh, field: &str, limits: &MeshLimits) -> Result<Mesh, Status> {
+    if !m.positions.len().is_multiple_of(3) {
+        return Err(invalid(
+            format!("{field}.positions"),
+            format!("length {} is not a multiple of 3", m.positions.len()),
+        ));
+    }
+    if !m.indices.len().is_multiple_of(3) {
+        return Err(invalid(format!("{field}.indices"), format!("length {} is not a multiple of 3", m.indices.len())));
+    }
+    let vertex_count = m.positions.len() / 3;
+    let face_count = m.indices.len() / 3;
+    if face_count == 0 {
+        return Err(invalid(format!("{field}.indices"), "empty: the mesh has no faces"));
+    }
+    if face_count > limits.max_faces {
+        return Err(invalid(
+            field,
+            format!("mesh too large: {face_count} faces exceeds the limit of {}", limits.max_faces),
+        ));
+    }
+    if vertex_count > limits.max_vertices {
+        return Err(invalid(
+            field,
+            format!("mesh too large: {vertex_count} vertices exceeds the limit of {}", limits.max_vertices),
+        ));
+    }
+    if let Some(i) = m.positions.iter().position(|c| !c.is_finite()) {
+        return Err(invalid(format!("{field}.positions[{i}]"), format!("{} is not finite", m.positions[i])));
+    }
+    if let Some(k) = m.indices.iter().position(|&v| v as usize >= vertex_count) {
+        return Err(invalid(
+            format!("{field}.indices[{k}]"),
+            format!("vertex {} out of range ({vertex_count} vertices)", m.indices[k]),
+        ));
+    }
+    let positions = m.positions.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    let triangles = m.indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    Mesh::new(positions, triangles).map_err(|e| invalid(field, e.to_string()))
+}
+
+/// Converts an engine mesh to the contract.
+pub fn mesh_to_proto(mesh: &Mesh) -> proto::Mesh {
+    proto::Mesh {
+        positions: mesh.positions.iter().flatten().copied().collect(),
+        indices: mesh.triangles.iter().flatten().copied().collect(),
+        normals: Vec::new(),
+        uvs: Vec::new(),
+    }
+}
+
+/// Converts one vertex split to the contract.
+pub fn split_to_proto(s: &VertexSplit) -> proto::VertexSplit {
+    proto::VertexSplit {
+        vs: s.vs,
+        vl: (s.vl != NO_VERTEX).then_some(s.vl),
+        vr: (s.vr != NO_VERTEX).then_some(s.vr),
+        position: s.new_position.to_vec(),
+        vs_position: if s.moves_vs() { s.split_position.to_vec() } else { Vec::new() },
+        error: s.error,
+    }
+}
+
+/// Converts a progressive mesh to the contract.
+pub fn progressive_to_proto(pm: &ProgressiveMesh) -> proto::ProgressiveMesh {
+    proto::ProgressiveMesh {
+        base: Some(mesh_to_proto(pm.base())),
+        splits: pm.splits().iter().map(split_to_proto).collect(),
+    }
+}
+
+/// Rebuilds a progressive mesh from its contract form (a client reassembling a stream), checking
+/// it by replaying every split.
+pub fn progressive_from_proto(base: &proto::Mesh, splits: &[proto::VertexSplit]) -> Result<ProgressiveMesh, Status> {
+    let base = mesh_from_proto(base, "base", &MeshLimits::default())?;
+    let mut current: Vec<[f32; 3]> = base.positions.clone();
+    let mut out = Vec::with_capacity(splits.len());
+    for (j, s) in splits.iter().enumerate() {
+        let field = format!("splits[{j}]");
+        let triple = |v: &[f32], what: &str| -> Result<[f32; 3], Status> {
+            <[f32; 3]>::try_from(v).map_err(|_| invalid(format!("{field}.{what}"), "needs 3 floats"))
+        };
+        if s.vs as usize >= current.len() {
+            return Err(invalid(format!("{field}.vs"), "out of range"));
+        }
+        let new_position = triple(&s.position, "position")?;
+        let collapsed_position = current[s.vs as usize];
+        let split_position =
+            if s.vs_position.is_empty() { collapsed_position } else { triple(&s.vs_position, "vs_position")? };
+        current[s.vs as usize] = split_position;
+        current.push(new_position);
+        out.push(VertexSplit {
+            vs: s.vs,
+            vl: s.vl.unwrap_or(NO_VERTEX),
+            vr: s.vr.unwrap_or(NO_VERTEX),
+            new_position,
+            split_position,
+            collapsed_position,
+            error: s.error,
+        });
+    }
+    ProgressiveMesh::from_parts(base, out).map_err(|e| invalid("splits", e.to_string()))
+}
+
+/// Engine options from the contract's; `w` is the exponent to use (given or predicted).
+pub fn simplify_options(o: &proto::SimplifyOptions, w: f64) -> Result<SimplifyOptions, Status> {
+    let metric = match proto::Metric::try_from(o.metric) {
+        Ok(proto::Metric::Unspecified | proto::Metric::Qfvp) => Metric::Qfvp { w },
+        Ok(proto::Metric::Qem) => Metric::Qem,
+        Ok(proto::Metric::Melax) => Metric::Melax,
+        Err(_) => return Err(invalid("options.metric", format!("unknown value {}", o.metric))),
+    };
+    let placement = match proto::Placement::try_from(o.placement) {
+        Ok(proto::Placement::Unspecified | proto::Placement::Optimal) => Placement::Optimal,
+        Ok(proto::Placement::Paper) => Placement::Paper,
+        Ok(proto::Placement::Endpoint) => Placement::Endpoint,
+        Err(_) => return Err(invalid("options.placement", format!("unknown value {}", o.placement))),
+    };
+    let normals = match proto::NormalUpdate::try_from(o.normals) {
+        Ok(proto::NormalUpdate::Unspecified | proto::NormalUpdate::Linear) => NormalUpdate::Linear,
+        Ok(proto::NormalUpdate::Recompute) => NormalUpdate::Recompute,
+        Err(_) => return Err(invalid("options.normals", format!("unknown value {}", o.normals))),
+    };
+    let boundary = match proto::BoundaryMode::try_from(o.boundary) {
+        Ok(proto::BoundaryMode::Unspecified | proto::BoundaryMode::Preserve) => BoundaryMode::Preserve,
+        Ok(proto::BoundaryMode::Lock) => BoundaryMode::Lock,
+        Err(_) => return Err(invalid("options.boundary", format!("unknown value {}", o.boundary))),
+    };
+    if let Some(r) = o.target_ratio
+        && !(0.0..1.0).contains(&r)
+    {
+        return Err(invalid("options.target_ratio", format!("{r} is outside [0, 1)")));
+    }
+    if !(0.0..=2.0).contains(&w) {
+        return Err(invalid("options.w", format!("{w} is outside [0, 2]")));
+    }
+    let target_ratio = match (o.target_faces, o.target_ratio) {
+        (None, None) => Some(0.5),
+        (_, r) => r,
+    };
+    Ok(SimplifyOptions {
+        target_faces: o.target_faces.map(|n| n as usize),
+        target_ratio,
+        max_error: o.max_error,
+        metric,
+        placement,
+        normals,
+        boundary,
+        max_normal_change_degrees: o.max_normal_change_degrees.unwrap_or(90.0),
+        record_progressive: o.return_progressive,
+        cancel: None,
+    })
+}

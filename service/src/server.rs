@@ -1,0 +1,450 @@
+//! The tonic gRPC server: admission control, CPU work off the async runtime, cancellation,
+//! health, reflection, compression, metrics, optional TLS and bearer token, graceful shutdown.
+//!
+//! Admission: at most `max_concurrent` heavy requests run (each on a blocking thread), at most
+//! `max_queue` wait; beyond that a request is refused with RESOURCE_EXHAUSTED at once. Every heavy
+//! request carries a cancel flag that the engine reads inside its loops; the flag is raised when
+//! the request's future is dropped (client cancel, deadline), so the work stops within
+//! milliseconds and its CPU slot frees.
+
+use std::future::Future;
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::time::Instant;
+
+use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
+use meshlod_engine::refine::{RefineMode, RefineOptions, refine};
+use meshlod_engine::simplify::simplify;
+use tokio::net::TcpListener;
+use tokio::sync::{Semaphore, mpsc};
+use tokio_stream::wrappers::{ReceiverStream, TcpListenerStream};
+use tonic::codec::CompressionEncoding;
+use tonic::{Request, Response, Status};
+
+use crate::convert::{
+    self, MeshLimits, engine_status, mesh_from_input, mesh_to_proto, progressive_to_proto, split_to_proto,
+};
+use crate::metrics::Metrics;
+use crate::proto;
+use crate::proto::mesh_lod_server::{MeshLod, MeshLodServer};
+
+/// Everything the server is configured with; `Default` is the embedded default that needs no
+/// configuration: loopback, one slot per core.
+#[derive(Debug, Clone)]
+pub struct ServerConfig {
+    /// gRPC listen address.
+    pub listen: SocketAddr,
+    /// Prometheus metrics listen address (`None`: no metrics endpoint).
+    pub metrics_listen: Option<SocketAddr>,
+    /// Heavy requests running at once.
+    pub max_concurrent: usize,
+    /// Heavy requests waiting at once.
+    pub max_queue: usize,
+    /// Largest gRPC message accepted or sent, bytes.
+    pub max_message_bytes: usize,
+    /// Target size of each SimplifyStream message, bytes.
+    pub stream_message_bytes: usize,
+    /// Mesh size limits.
+    pub limits: MeshLimits,
+    /// PEM certificate and key for TLS (both or neither).
+    pub tls: Option<(PathBuf, PathBuf)>,
+    /// Required bearer token (`authorization: Bearer <token>`), if any.
+    pub token: Option<String>,
+}
+
+impl Default for ServerConfig {
+    fn default() -> Self {
+        let cores = std::thread::available_parallelism().map_or(2, |n| n.get());
+        ServerConfig {
+            listen: "127.0.0.1:50051".parse().expect("valid address"),
+            metrics_listen: None,
+            max_concurrent: cores,
+            max_queue: 2 * cores,
+            // A 2-million-triangle mesh is ~36 MB as positions + indices; leave room for PM records.
+            max_message_bytes: 256 << 20,
+            stream_message_bytes: 1 << 20,
+            limits: MeshLimits::default(),
+            tls: None,
+            token: None,
+        }
+    }
+}
+
+/// Bounded admission: `max_concurrent` slots and a waiting line of `max_queue`.
+struct Admission {
+    slots: Arc<Semaphore>,
+    waiting: AtomicUsize,
+    max_queue: usize,
+}
+
+/// Raises the cancel flag when dropped unless disarmed: the request's future was dropped.
+struct CancelOnDrop(Arc<AtomicBool>, bool);
+
+impl Drop for CancelOnDrop {
+    fn drop(&mut self) {
+        if !self.1 {
+            self.0.store(true, Ordering::Relaxed);
+        }
+    }
+}
+
+/// The MeshLod service.
+#[derive(Clone)]
+pub struct MeshLodService {
+    config: Arc<ServerConfig>,
+    admission: Arc<Admission>,
+    metrics: Arc<Metrics>,
+}
+
+impl MeshLodService {
+    /// A service with its own admission control and metrics.
+    pub fn new(config: ServerConfig, metrics: Arc<Metrics>) -> Self {
+        let admission = Admission {
+            slots: Arc::new(Semaphore::new(config.max_concurrent.max(1))),
+            waiting: AtomicUsize::new(0),
+            max_queue: config.max_queue,
+        };
+        MeshLodService { config: Arc::new(config), admission: Arc::new(admission), metrics }
+    }
+
+    /// Runs `work` on a blocking thread once admitted, with a cancel flag tied to this future.
+    async fn run<T: Send + 'static>(
+        &self,
+        method: &'static str,
+        work: impl FnOnce(Arc<AtomicBool>) -> Result<T, Status> + Send + 'static,
+    ) -> Result<T, Status> {
+        let started = Instant::now();
+        let result = self.admit_and_run(work).await;
+        let code = result.as_ref().map_or_else(|s| s.code(), |_| tonic::Code::Ok);
+        self.metrics.record(method, code, started.elapsed());
+        match &result {
+            Ok(_) => tracing::info!(method, ms = started.elapsed().as_millis() as u64, "ok"),
+            Err(s) => tracing::warn!(method, code = ?s.code(), message = s.message(), "refused or failed"),
+        }
+        result
+    }
+
+    async fn admit_and_run<T: Send + 'static>(
+        &self,
+        work: impl FnOnce(Arc<AtomicBool>) -> Result<T, Status> + Send + 'static,
+    ) -> Result<T, Status> {
+        let permit = match self.admission.slots.clone().try_acquire_owned() {
+            Ok(p) => p,
+            Err(_) => {
+                let waiting = self.admission.waiting.fetch_add(1, Ordering::SeqCst);
+                if waiting >= self.admission.max_queue {
+                    self.admission.waiting.fetch_sub(1, Ordering::SeqCst);
+                    self.metrics.add_rejected();
+                    return Err(Status::resource_exhausted(format!(
+                        "server busy: {} requests running and {} queued; retry later",
+                        self.config.max_concurrent, self.admission.max_queue
+                    )));
+                }
+                self.metrics.add_queued(1);
+                // The waiting count is released however this future ends (dropped while queued too).
+                struct Leave<'a>(&'a Admission, &'a Metrics);
+                impl Drop for Leave<'_> {
+                    fn drop(&mut self) {
+                        self.0.waiting.fetch_sub(1, Ordering::SeqCst);
+                        self.1.add_queued(-1);
+                    }
+                }
+                let _leave = Leave(&self.admission, &self.metrics);
+                self.admission.slots.clone().acquire_owned().await.map_err(|_| Status::unavailable("shutting down"))?
+            }
+        };
+        let cancel = Arc::new(AtomicBool::new(false));
+        let mut guard = CancelOnDrop(cancel.clone(), false);
+        let metrics = self.metrics.clone();
+        metrics.add_in_flight(1);
+        let handle = tokio::task::spawn_blocking(move || {
+            let _permit = permit; // the slot is held until the work really ends
+            let out = work(cancel);
+            metrics.add_in_flight(-1);
+            out
+        });
+        let result = handle.await.map_err(|e| {
+            tracing::error!(error = %e, "worker panicked");
+            Status::internal("internal error while processing the request")
+        })?;
+        guard.1 = true;
+        result
+    }
+}
+
+fn require<'a, T>(value: &'a Option<T>, field: &str) -> Result<&'a T, Status> {
+    value.as_ref().ok_or_else(|| Status::invalid_argument(format!("{field}: missing")))
+}
+
+/// Validates and runs one simplification; shared by the unary and streaming RPCs.
+fn run_simplify(
+    request: &proto::SimplifyRequest,
+    limits: &MeshLimits,
+    cancel: Arc<AtomicBool>,
+    force_progressive: bool,
+) -> Result<
+    (meshlod_engine::simplify::Simplified, proto::SimplifyStats, Option<proto::HausdorffReport>, meshlod_engine::Mesh),
+    Status,
+> {
+    let default_options = proto::SimplifyOptions::default();
+    let o = request.options.as_ref().unwrap_or(&default_options);
+    if o.w_auto {
+        return Err(Status::failed_precondition(
+            "options.w_auto: this server has no predictor model yet; give options.w",
+        ));
+    }
+    let w = o.w.unwrap_or(0.0);
+    let mut options = convert::simplify_options(o, w)?;
+    options.record_progressive |= force_progressive;
+    options.cancel = Some(cancel);
+    let mesh = mesh_from_input(request.input.as_ref(), "input", limits)?;
+    let result = simplify(&mesh, &options).map_err(|e| engine_status(e, "options"))?;
+    let hausdorff = if o.compute_hausdorff {
+        let d =
+            hausdorff(&mesh, &result.mesh, &HausdorffOptions::default()).map_err(|e| engine_status(e, "options"))?;
+        Some(proto::HausdorffReport {
+            hausdorff: d.hausdorff,
+            mean: d.mean,
+            rms: d.rms,
+            hausdorff_diag_pct: d.hausdorff_diag_pct,
+            samples: d.samples as u64,
+        })
+    } else {
+        None
+    };
+    let s = &result.stats;
+    let stats = proto::SimplifyStats {
+        faces_in: s.faces_in as u32,
+        faces_out: s.faces_out as u32,
+        vertices_in: s.vertices_in as u32,
+        vertices_out: s.vertices_out as u32,
+        collapses: s.collapses as u32,
+        stop_reason: serde_json_name(&s.stop_reason),
+        metric: options.metric.name().to_string(),
+        w: options.metric.w().unwrap_or(0.0),
+        w_source: proto::WSource::Given as i32,
+        model_version: String::new(),
+        max_collapse_error: s.max_collapse_error,
+        seconds: s.seconds,
+    };
+    Ok((result, stats, hausdorff, mesh))
+}
+
+fn serde_json_name(reason: &meshlod_engine::simplify::StopReason) -> String {
+    use meshlod_engine::simplify::StopReason;
+    match reason {
+        StopReason::TargetReached => "target_reached",
+        StopReason::MaxErrorReached => "max_error_reached",
+        StopReason::NoLegalCollapse => "no_legal_collapse",
+    }
+    .to_string()
+}
+
+#[tonic::async_trait]
+impl MeshLod for MeshLodService {
+    async fn simplify(
+        &self,
+        request: Request<proto::SimplifyRequest>,
+    ) -> Result<Response<proto::SimplifyResponse>, Status> {
+        let request = request.into_inner();
+        let limits = self.config.limits;
+        let response = self
+            .run("Simplify", move |cancel| {
+                let (result, stats, hausdorff, _) = run_simplify(&request, &limits, cancel, false)?;
+                Ok(proto::SimplifyResponse {
+                    mesh: Some(mesh_to_proto(&result.mesh)),
+                    progressive: result.progressive.as_ref().map(progressive_to_proto),
+                    stats: Some(stats),
+                    hausdorff,
+                })
+            })
+            .await?;
+        Ok(Response::new(response))
+    }
+
+    type SimplifyStreamStream = ReceiverStream<Result<proto::SimplifyStreamMessage, Status>>;
+
+    async fn simplify_stream(
+        &self,
+        request: Request<proto::SimplifyRequest>,
+    ) -> Result<Response<Self::SimplifyStreamStream>, Status> {
+        let request = request.into_inner();
+        let limits = self.config.limits;
+        let (result, stats, _, _) =
+            self.run("SimplifyStream", move |cancel| run_simplify(&request, &limits, cancel, true)).await?;
+        let pm = result.progressive.expect("progressive forced on");
+        // Splits are ~20–40 bytes encoded; batch so each message stays under the configured size.
+        let per_batch = (self.config.stream_message_bytes / 48).max(1);
+        let (tx, rx) = mpsc::channel(4);
+        tokio::spawn(async move {
+            use proto::simplify_stream_message::Item;
+            let send = |item| proto::SimplifyStreamMessage { item: Some(item) };
+            if tx.send(Ok(send(Item::Base(mesh_to_proto(pm.base()))))).await.is_err() {
+                return;
+            }
+            for (i, chunk) in pm.splits().chunks(per_batch).enumerate() {
+                let batch = proto::VertexSplitBatch {
+                    first: (i * per_batch) as u32,
+                    splits: chunk.iter().map(split_to_proto).collect(),
+                };
+                if tx.send(Ok(send(Item::Splits(batch)))).await.is_err() {
+                    return; // the client went away
+                }
+            }
+            let _ = tx.send(Ok(send(Item::Stats(stats)))).await;
+        });
+        Ok(Response::new(ReceiverStream::new(rx)))
+    }
+
+    async fn refine(&self, request: Request<proto::RefineRequest>) -> Result<Response<proto::RefineResponse>, Status> {
+        let request = request.into_inner();
+        let limits = self.config.limits;
+        let response = self
+            .run("Refine", move |cancel| {
+                if request.etc_auto {
+                    return Err(Status::failed_precondition(
+                        "etc_auto: this server has no predictor model yet; give etc or target_faces",
+                    ));
+                }
+                let mesh = mesh_from_input(request.input.as_ref(), "input", &limits)?;
+                let mode = match proto::RefineMode::try_from(request.mode) {
+                    Ok(proto::RefineMode::Simplify) => RefineMode::Simplify,
+                    Ok(proto::RefineMode::Subdivide) => RefineMode::Subdivide,
+                    Ok(proto::RefineMode::Both) => RefineMode::Both,
+                    Ok(proto::RefineMode::Unspecified) => match request.target_faces {
+                        Some(n) if (n as usize) < mesh.face_count() => RefineMode::Simplify,
+                        _ => RefineMode::Subdivide,
+                    },
+                    Err(_) => return Err(Status::invalid_argument(format!("mode: unknown value {}", request.mode))),
+                };
+                if request.etc.is_none() && request.target_faces.is_none() {
+                    return Err(Status::invalid_argument("etc: give etc or target_faces"));
+                }
+                let options = RefineOptions {
+                    etc: request.etc,
+                    target_faces: request.target_faces.map(|n| n as usize),
+                    mode,
+                    rounds: request.rounds.unwrap_or(1),
+                    cancel: Some(cancel),
+                };
+                let result = refine(&mesh, &options).map_err(|e| engine_status(e, "request"))?;
+                if result.mesh.face_count() > limits.max_faces {
+                    return Err(Status::invalid_argument(format!(
+                        "rounds: the result would have {} faces, over the limit of {}",
+                        result.mesh.face_count(),
+                        limits.max_faces
+                    )));
+                }
+                let s = &result.stats;
+                Ok(proto::RefineResponse {
+                    mesh: Some(mesh_to_proto(&result.mesh)),
+                    stats: Some(proto::RefineStats {
+                        faces_in: s.faces_in as u32,
+                        faces_out: s.faces_out as u32,
+                        etc: s.etc,
+                        mode: format!("{:?}", s.mode).to_lowercase(),
+                        split_edges: s.split_edges as u32,
+                        collapses: s.collapses as u32,
+                        seconds: s.seconds,
+                    }),
+                })
+            })
+            .await?;
+        Ok(Response::new(response))
+    }
+
+    async fn predict(
+        &self,
+        request: Request<proto::PredictRequest>,
+    ) -> Result<Response<proto::PredictResponse>, Status> {
+        let _ = require(&request.get_ref().subject, "subject")?;
+        self.metrics.record("Predict", tonic::Code::Unimplemented, std::time::Duration::ZERO);
+        Err(Status::unimplemented("Predict: the predictor model is not part of this build yet"))
+    }
+}
+
+/// Checks the bearer token of every request when one is configured.
+#[derive(Clone)]
+pub struct TokenCheck(Option<Arc<str>>);
+
+impl tonic::service::Interceptor for TokenCheck {
+    fn call(&mut self, request: Request<()>) -> Result<Request<()>, Status> {
+        let Some(expected) = &self.0 else { return Ok(request) };
+        let given = request.metadata().get("authorization").and_then(|v| v.to_str().ok());
+        match given.and_then(|v| v.strip_prefix("Bearer ")) {
+            Some(token) if token.as_bytes() == expected.as_bytes() => Ok(request),
+            Some(_) => Err(Status::unauthenticated("invalid bearer token")),
+            None => Err(Status::unauthenticated("missing authorization: Bearer <token>")),
+        }
+    }
+}
+
+/// Runs the server on `listener` until `shutdown` completes, then drains in-flight requests.
+pub async fn serve_with_listener(
+    listener: TcpListener,
+    config: ServerConfig,
+    shutdown: impl Future<Output = ()> + Send + 'static,
+) -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
+    let metrics = Arc::new(Metrics::default());
+    if let Some(addr) = config.metrics_listen {
+        let metrics_listener = crate::metrics::bind(addr).await?;
+        tracing::info!(address = %metrics_listener.local_addr()?, "metrics on /metrics");
+        tokio::spawn(crate::metrics::serve_metrics(metrics_listener, metrics.clone()));
+    }
+    let (health_reporter, health_service) = tonic_health::server::health_reporter();
+    health_reporter.set_serving::<MeshLodServer<MeshLodService>>().await;
+    let reflection = tonic_reflection::server::Builder::configure()
+        .register_encoded_file_descriptor_set(proto::FILE_DESCRIPTOR_SET)
+        .register_encoded_file_descriptor_set(tonic_health::pb::FILE_DESCRIPTOR_SET)
+        .build_v1()?;
+    let service = MeshLodService::new(config.clone(), metrics);
+    let server = MeshLodServer::new(service)
+        .accept_compressed(CompressionEncoding::Gzip)
+        .accept_compressed(CompressionEncoding::Zstd)
+        .send_compressed(CompressionEncoding::Gzip)
+        .send_compressed(CompressionEncoding::Zstd)
+        .max_decoding_message_size(config.max_message_bytes)
+        .max_encoding_message_size(config.max_message_bytes);
+    let server = tonic::service::interceptor::InterceptedService::new(
+        server,
+        TokenCheck(config.token.as_deref().map(Arc::from)),
+    );
+    let mut builder = tonic::transport::Server::builder()
+        .trace_fn(|request| tracing::info_span!("grpc", path = %request.uri().path()));
+    if let Some((cert, key)) = &config.tls {
+        let identity = tonic::transport::Identity::from_pem(std::fs::read(cert)?, std::fs::read(key)?);
+        builder = builder.tls_config(tonic::transport::ServerTlsConfig::new().identity(identity))?;
+    }
+    tracing::info!(address = %listener.local_addr()?, tls = config.tls.is_some(), auth = config.token.is_some(), "serving meshlod.v1.MeshLod");
+    builder
+        .add_service(health_service)
+        .add_service(reflection)
+        .add_service(server)
+        .serve_with_incoming_shutdown(TcpListenerStream::new(listener), async move {
+            shutdown.await;
+            tracing::info!("shutting down: draining in-flight requests");
+        })
+        .await?;
+    Ok(())
+}
+
+/// Completes on SIGTERM or Ctrl-C.
+pub async fn shutdown_signal() {
+    let ctrl_c = async {
+        let _ = tokio::signal::ctrl_c().await;
+    };
+    #[cfg(unix)]
+    let term = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut s) => {
+                s.recv().await;
+            }
+            Err(_) => std::future::pending::<()>().await,
+        }
+    };
+    #[cfg(not(unix))]
+    let term = std::future::pending::<()>();
+    tokio::select! { _ = ctrl_c => {}, _ = term => {} }
+}
