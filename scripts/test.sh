@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Runs every test of meshlod: the Rust workspace (unit, integration, CLI end-to-end) and the
-# checks that need Python (the Hausdorff instrument against MeshLab's Metro).
+# Runs every test of meshlod: the Rust workspace (unit, integration, CLI and gRPC end to end),
+# then the checks that need Python: the Hausdorff instrument against MeshLab's Metro, the Python
+# example client against a live server, and the deploy manifests against the Kubernetes schemas.
 # Installs what it needs: a Python virtual environment in .venv from the pinned requirements.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -13,15 +14,33 @@ echo "== python environment"
 if [ ! -x .venv/bin/python ]; then
   python3 -m venv .venv
 fi
-.venv/bin/pip install --quiet --disable-pip-version-check -r tools/requirements.txt
+.venv/bin/pip install --quiet --disable-pip-version-check \
+  -r tools/requirements.txt -r examples/python/requirements.txt -r deploy/requirements.txt
+
+cargo build --workspace --locked --bin meshlod
+MESHLOD=target/debug/meshlod
 
 echo "== Hausdorff instrument vs MeshLab Metro"
 if [ -d "$MESHLOD_MESHES" ]; then
-  cargo build --workspace --locked --bin meshlod
-  .venv/bin/python tools/metro_check.py target/debug/meshlod "$MESHLOD_MESHES"
+  .venv/bin/python tools/metro_check.py "$MESHLOD" "$MESHLOD_MESHES"
 elif [ -n "${CI:-}" ]; then
   echo "shared meshes not found at $MESHLOD_MESHES: CI must run the Metro comparison" >&2
   exit 1
 else
   echo "!!! SKIPPED: shared meshes not found at $MESHLOD_MESHES (set MESHLOD_MESHES) !!!" >&2
 fi
+
+echo "== Python example client against a live server"
+port=$(.venv/bin/python -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+"$MESHLOD" serve --listen "127.0.0.1:$port" --metrics-listen "" &
+server=$!
+trap 'kill $server 2>/dev/null || true' EXIT
+.venv/bin/python examples/python/client.py --server "127.0.0.1:$port"
+kill -TERM "$server"
+wait "$server"
+trap - EXIT
+
+echo "== deploy manifests"
+.venv/bin/kubernetes-validate --strict deploy/k8s/*.yaml
+.venv/bin/yamllint -d relaxed deploy/compose.yaml deploy/k8s
+echo "scripts/test.sh: all checks passed"

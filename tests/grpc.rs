@@ -1,0 +1,344 @@
+//! End-to-end tests of the gRPC service over real loopback TCP: every RPC, the streamed
+//! progressive mesh, field-level errors, admission limits, cancellation, health, reflection,
+//! bearer tokens.
+
+use std::net::SocketAddr;
+use std::time::{Duration, Instant};
+
+use meshlod_engine::pm::ProgressiveMesh;
+use meshlod_engine::simplify::{SimplifyOptions, simplify};
+use meshlod_engine::{Mesh, procedural};
+use meshlod_service::convert::{MeshLimits, mesh_from_proto, mesh_to_proto, progressive_from_proto};
+use meshlod_service::proto;
+use meshlod_service::proto::mesh_lod_client::MeshLodClient;
+use meshlod_service::server::{ServerConfig, serve_with_listener};
+use tokio::sync::oneshot;
+use tonic::Code;
+use tonic::transport::Channel;
+
+struct TestServer {
+    addr: SocketAddr,
+    metrics: Option<SocketAddr>,
+    stop: Option<oneshot::Sender<()>>,
+    handle: tokio::task::JoinHandle<()>,
+}
+
+impl TestServer {
+    async fn start(config: ServerConfig) -> TestServer {
+        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let addr = listener.local_addr().unwrap();
+        let (tx, rx) = oneshot::channel::<()>();
+        let metrics = config.metrics_listen;
+        let handle = tokio::spawn(async move {
+            serve_with_listener(listener, config, async {
+                let _ = rx.await;
+            })
+            .await
+            .unwrap();
+        });
+        TestServer { addr, metrics, stop: Some(tx), handle }
+    }
+
+    async fn client(&self) -> MeshLodClient<Channel> {
+        let channel = channel(self.addr).await;
+        MeshLodClient::new(channel).max_decoding_message_size(usize::MAX).max_encoding_message_size(usize::MAX)
+    }
+
+    async fn stop(mut self) {
+        let _ = self.stop.take().unwrap().send(());
+        tokio::time::timeout(Duration::from_secs(30), self.handle).await.expect("graceful shutdown").unwrap();
+    }
+}
+
+async fn channel(addr: SocketAddr) -> Channel {
+    for _ in 0..50 {
+        if let Ok(c) = Channel::from_shared(format!("http://{addr}")).unwrap().connect().await {
+            return c;
+        }
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+    panic!("server at {addr} did not come up");
+}
+
+fn input(mesh: &Mesh) -> Option<proto::MeshInput> {
+    Some(proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(mesh_to_proto(mesh))) })
+}
+
+fn simplify_request(mesh: &Mesh, ratio: f64) -> proto::SimplifyRequest {
+    proto::SimplifyRequest {
+        input: input(mesh),
+        options: Some(proto::SimplifyOptions { target_ratio: Some(ratio), ..Default::default() }),
+    }
+}
+
+fn blob() -> Mesh {
+    procedural::bumpy_blob(40, 80, 3)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_rpc_over_loopback() {
+    let server = TestServer::start(ServerConfig::default()).await;
+    let mut client = server.client().await;
+    let mesh = blob();
+
+    // Simplify, with the progressive mesh and the Hausdorff figures.
+    let mut request = simplify_request(&mesh, 0.9);
+    let options = request.options.as_mut().unwrap();
+    options.return_progressive = true;
+    options.compute_hausdorff = true;
+    let response = client.simplify(request).await.unwrap().into_inner();
+    let stats = response.stats.unwrap();
+    assert_eq!(stats.stop_reason, "target_reached");
+    assert_eq!(stats.w_source, proto::WSource::Given as i32);
+    assert!(response.hausdorff.unwrap().hausdorff > 0.0);
+    let out = mesh_from_proto(response.mesh.as_ref().unwrap(), "mesh", &MeshLimits::default()).unwrap();
+    assert_eq!(out.face_count() as u32, stats.faces_out);
+    let pm = response.progressive.unwrap();
+    let pm = progressive_from_proto(pm.base.as_ref().unwrap(), &pm.splits).unwrap();
+    assert_eq!(pm.at_level(pm.levels()).face_count(), mesh.face_count());
+
+    // The same result as the engine in process (and so as the CLI, which calls the same engine).
+    let local = simplify(&mesh, &SimplifyOptions { target_ratio: Some(0.9), ..Default::default() }).unwrap();
+    assert_eq!(local.mesh, out);
+
+    // Refine.
+    let refined = client
+        .refine(proto::RefineRequest { input: input(&mesh), etc: Some(1.0), ..Default::default() })
+        .await
+        .unwrap()
+        .into_inner();
+    let rs = refined.stats.unwrap();
+    assert_eq!(rs.mode, "subdivide");
+    assert!(rs.faces_out > rs.faces_in);
+
+    // Encoded file input.
+    let mut obj = Vec::new();
+    meshlod_engine::io::write_mesh_to(&mut obj, &mesh, meshlod_engine::io::MeshFormat::Obj).unwrap();
+    let from_file = client
+        .simplify(proto::SimplifyRequest {
+            input: Some(proto::MeshInput {
+                source: Some(proto::mesh_input::Source::File(proto::EncodedMesh {
+                    data: obj,
+                    format: proto::MeshFormat::Obj as i32,
+                })),
+            }),
+            options: Some(proto::SimplifyOptions { target_faces: Some(500), ..Default::default() }),
+        })
+        .await
+        .unwrap()
+        .into_inner();
+    assert!(from_file.stats.unwrap().faces_out <= 500);
+
+    // Predict: present in the contract; this build has no model yet and says so.
+    let predicted = client
+        .predict(proto::PredictRequest {
+            subject: Some(proto::predict_request::Subject::Input(input(&mesh).unwrap())),
+            target_ratio: Some(0.5),
+            ..Default::default()
+        })
+        .await;
+    assert!(matches!(predicted, Err(s) if s.code() == Code::Unimplemented));
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn streamed_progressive_mesh_reassembles_exactly() {
+    let config = ServerConfig { stream_message_bytes: 4096, ..Default::default() };
+    let server = TestServer::start(config).await;
+    let mut client = server.client().await;
+    let mesh = blob();
+    let mut stream = client.simplify_stream(simplify_request(&mesh, 0.95)).await.unwrap().into_inner();
+    let mut base = None;
+    let mut splits = Vec::new();
+    let mut stats = None;
+    let mut batches = 0;
+    while let Some(message) = stream.message().await.unwrap() {
+        match message.item.unwrap() {
+            proto::simplify_stream_message::Item::Base(b) => base = Some(b),
+            proto::simplify_stream_message::Item::Splits(batch) => {
+                assert_eq!(batch.first as usize, splits.len(), "batches arrive in order");
+                assert!(prost::Message::encoded_len(&batch) <= 8192, "batch too large");
+                splits.extend(batch.splits);
+                batches += 1;
+            }
+            proto::simplify_stream_message::Item::Stats(s) => stats = Some(s),
+        }
+    }
+    assert!(batches > 1, "small message size must split the stream");
+    let stats = stats.expect("stats come last");
+    let pm: ProgressiveMesh = progressive_from_proto(&base.unwrap(), &splits).unwrap();
+    assert_eq!(pm.base().face_count() as u32, stats.faces_out);
+    // Matches the engine's progressive mesh (as written by `meshlod simplify --pm`) exactly.
+    let local =
+        simplify(&mesh, &SimplifyOptions { target_ratio: Some(0.95), record_progressive: true, ..Default::default() })
+            .unwrap()
+            .progressive
+            .unwrap();
+    assert_eq!(pm.base(), local.base());
+    assert_eq!(pm.splits(), local.splits());
+    // Fully refined it is the input, bit for bit.
+    let full = pm.at_level(pm.levels());
+    let map = local.input_vertex().unwrap();
+    for (v, p) in full.positions.iter().enumerate() {
+        assert_eq!(p.map(f32::to_bits), mesh.positions[map[v] as usize].map(f32::to_bits));
+    }
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn invalid_requests_name_the_field() {
+    let server = TestServer::start(ServerConfig {
+        limits: MeshLimits { max_faces: 5000, max_vertices: 5000 },
+        ..Default::default()
+    })
+    .await;
+    let mut client = server.client().await;
+    let tri = |positions: Vec<f32>, indices: Vec<u32>| proto::SimplifyRequest {
+        input: Some(proto::MeshInput {
+            source: Some(proto::mesh_input::Source::Mesh(proto::Mesh { positions, indices, ..Default::default() })),
+        }),
+        options: None,
+    };
+    let cases: Vec<(proto::SimplifyRequest, &str)> = vec![
+        (tri(vec![0., 0., 0., 1., 0., 0., 0., f32::NAN, 0.], vec![0, 1, 2]), "input.mesh.positions[7]"),
+        (tri(vec![0., 0., 0., 1., 0., 0., 0., 1., 0.], vec![0, 1, 3]), "input.mesh.indices[2]"),
+        (tri(vec![0., 0., 0., 1., 0., 0., 0., 1.], vec![0, 1, 2]), "input.mesh.positions"),
+        (tri(vec![], vec![]), "input.mesh.indices"),
+        (proto::SimplifyRequest { input: None, options: None }, "input"),
+        (
+            proto::SimplifyRequest {
+                options: Some(proto::SimplifyOptions { target_ratio: Some(1.5), ..Default::default() }),
+                ..simplify_request(&procedural::icosphere(2), 0.5)
+            },
+            "options.target_ratio",
+        ),
+        (
+            proto::SimplifyRequest {
+                options: Some(proto::SimplifyOptions { w: Some(7.0), ..Default::default() }),
+                ..simplify_request(&procedural::icosphere(2), 0.5)
+            },
+            "options.w",
+        ),
+        (simplify_request(&procedural::icosphere(4), 0.5), "mesh too large"),
+    ];
+    for (request, field) in cases {
+        let status = client.simplify(request).await.unwrap_err();
+        assert_eq!(status.code(), Code::InvalidArgument, "{field}: {status:?}");
+        assert!(status.message().contains(field), "{field}: message '{}'", status.message());
+    }
+    let bad_file = proto::SimplifyRequest {
+        input: Some(proto::MeshInput {
+            source: Some(proto::mesh_input::Source::File(proto::EncodedMesh {
+                data: b"v 0 0 0\nv 1 0 0\nf 1 2 9\n".to_vec(),
+                format: proto::MeshFormat::Obj as i32,
+            })),
+        }),
+        options: None,
+    };
+    let status = client.simplify(bad_file).await.unwrap_err();
+    assert_eq!(status.code(), Code::InvalidArgument);
+    assert!(status.message().starts_with("input.file") && status.message().contains("line 3"), "{}", status.message());
+    let refine = client
+        .refine(proto::RefineRequest {
+            input: input(&procedural::icosphere(1)),
+            etc: Some(1.0),
+            rounds: Some(9),
+            ..Default::default()
+        })
+        .await
+        .unwrap_err();
+    assert_eq!(refine.code(), Code::InvalidArgument);
+    assert!(refine.message().contains("rounds"), "{}", refine.message());
+    // The server is still healthy after all of that.
+    assert!(client.simplify(simplify_request(&procedural::icosphere(2), 0.5)).await.is_ok());
+    server.stop().await;
+}
+
+/// A request that takes seconds on this machine: 2M-face bumpy blob to 1%.
+fn long_request() -> proto::SimplifyRequest {
+    simplify_request(&procedural::bumpy_blob(700, 1400, 1), 0.99)
+}
+
+fn in_flight(metrics: SocketAddr) -> i64 {
+    use std::io::{Read, Write};
+    let mut s = std::net::TcpStream::connect(metrics).unwrap();
+    s.write_all(b"GET /metrics HTTP/1.1\r\nhost: x\r\n\r\n").unwrap();
+    let mut text = String::new();
+    s.read_to_string(&mut text).unwrap();
+    text.lines().find_map(|l| l.strip_prefix("meshlod_in_flight ")).unwrap().trim().parse().unwrap()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn busy_server_refuses_and_cancelled_work_stops() {
+    let metrics_port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap();
+    let config =
+        ServerConfig { max_concurrent: 1, max_queue: 0, metrics_listen: Some(metrics_port), ..Default::default() };
+    let server = TestServer::start(config).await;
+    let metrics = server.metrics.unwrap();
+    let long = long_request();
+    let mut first = server.client().await;
+    let started = Instant::now();
+    let running = tokio::spawn(async move {
+        let mut request = tonic::Request::new(long);
+        request.set_timeout(Duration::from_millis(1500));
+        first.simplify(request).await
+    });
+    // Wait until the long request occupies the only slot.
+    while in_flight(metrics) == 0 {
+        assert!(started.elapsed() < Duration::from_secs(20), "long request never started");
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+    let mut second = server.client().await;
+    let refused = second.simplify(simplify_request(&procedural::icosphere(2), 0.5)).await.unwrap_err();
+    assert_eq!(refused.code(), Code::ResourceExhausted, "{refused:?}");
+    // The deadline passes: the call fails and the server's worker stops instead of finishing.
+    let result = running.await.unwrap();
+    let code = result.unwrap_err().code();
+    assert!(matches!(code, Code::Cancelled | Code::DeadlineExceeded), "{code:?}");
+    let deadline_at = Instant::now();
+    while in_flight(metrics) != 0 {
+        assert!(deadline_at.elapsed() < Duration::from_secs(3), "cancelled work kept running");
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    // The slot is free again.
+    assert!(second.simplify(simplify_request(&procedural::icosphere(2), 0.5)).await.is_ok());
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn health_reflection_and_token() {
+    let server = TestServer::start(ServerConfig { token: Some("s3cret".into()), ..Default::default() }).await;
+    let channel = channel(server.addr).await;
+    let mut health = tonic_health::pb::health_client::HealthClient::new(channel.clone());
+    let status = health
+        .check(tonic_health::pb::HealthCheckRequest { service: "meshlod.v1.MeshLod".into() })
+        .await
+        .unwrap()
+        .into_inner();
+    assert_eq!(status.status, tonic_health::pb::health_check_response::ServingStatus::Serving as i32);
+
+    use tonic_reflection::pb::v1::server_reflection_client::ServerReflectionClient;
+    use tonic_reflection::pb::v1::server_reflection_request::MessageRequest;
+    use tonic_reflection::pb::v1::server_reflection_response::MessageResponse;
+    let mut reflection = ServerReflectionClient::new(channel.clone());
+    let request = tonic_reflection::pb::v1::ServerReflectionRequest {
+        host: String::new(),
+        message_request: Some(MessageRequest::ListServices(String::new())),
+    };
+    let mut responses = reflection.server_reflection_info(tokio_stream::iter([request])).await.unwrap().into_inner();
+    let Some(MessageResponse::ListServicesResponse(list)) =
+        responses.message().await.unwrap().unwrap().message_response
+    else {
+        panic!("no service list");
+    };
+    let names: Vec<String> = list.service.into_iter().map(|s| s.name).collect();
+    assert!(names.contains(&"meshlod.v1.MeshLod".to_string()), "{names:?}");
+
+    let mut client = MeshLodClient::new(channel);
+    let denied = client.simplify(simplify_request(&procedural::icosphere(2), 0.5)).await.unwrap_err();
+    assert_eq!(denied.code(), Code::Unauthenticated);
+    let mut request = tonic::Request::new(simplify_request(&procedural::icosphere(2), 0.5));
+    request.metadata_mut().insert("authorization", "Bearer s3cret".parse().unwrap());
+    assert!(client.simplify(request).await.is_ok());
+    server.stop().await;
+}
