@@ -19,7 +19,7 @@ use meshlod_engine::refine::{RefineMode, RefineOptions, refine};
 use meshlod_engine::simplify::simplify;
 use tokio::net::TcpListener;
 use tokio::sync::{Semaphore, mpsc};
-use tokio_stream::wrappers::{ReceiverStream, TcpListenerStream};
+use tokio_stream::wrappers::ReceiverStream;
 use tonic::codec::CompressionEncoding;
 use tonic::{Request, Response, Status};
 
@@ -417,12 +417,16 @@ pub async fn serve_with_listener(
         let identity = tonic::transport::Identity::from_pem(std::fs::read(cert)?, std::fs::read(key)?);
         builder = builder.tls_config(tonic::transport::ServerTlsConfig::new().identity(identity))?;
     }
-    tracing::info!(address = %listener.local_addr()?, tls = config.tls.is_some(), auth = config.token.is_some(), "serving meshlod.v1.MeshLod");
+    // No Nagle: small gRPC frames would otherwise wait for delayed ACKs (~40 ms per request).
+    let incoming = tonic::transport::server::TcpIncoming::from(listener)
+        .with_nodelay(Some(true))
+        .with_keepalive(Some(std::time::Duration::from_secs(60)));
+    tracing::info!(address = %incoming.local_addr()?, tls = config.tls.is_some(), auth = config.token.is_some(), "serving meshlod.v1.MeshLod");
     builder
         .add_service(health_service)
         .add_service(reflection)
         .add_service(server)
-        .serve_with_incoming_shutdown(TcpListenerStream::new(listener), async move {
+        .serve_with_incoming_shutdown(incoming, async move {
             shutdown.await;
             tracing::info!("shutting down: draining in-flight requests");
         })
