@@ -40,6 +40,18 @@ kill -TERM "$server"
 wait "$server"
 trap - EXIT
 
+echo "== predictor training pipeline (short run on the committed samples)"
+if [ ! -x .venv-train/bin/python ]; then
+  python3 -m venv .venv-train
+fi
+.venv-train/bin/pip install --quiet --disable-pip-version-check -r training/requirements.txt
+model_dir=$(mktemp -d)
+.venv-train/bin/python training/train.py --quick --samples training/data/samples.csv --out "$model_dir"
+# The freshly exported model, loaded by tract, reproduces torch's golden outputs.
+MESHLOD_MODEL_DIR="$model_dir" cargo test --workspace --locked --lib -- model_matches_its_golden_outputs
+"$MESHLOD" generate blob -o "$model_dir/blob.obj" --resolution 16
+MESHLOD_MODEL_DIR="$model_dir" "$MESHLOD" predict "$model_dir/blob.obj" --ratio 0.9 --json
+
 echo "== deploy manifests"
 .venv/bin/kubernetes-validate --strict deploy/k8s/*.yaml
 .venv/bin/yamllint -d relaxed deploy/compose.yaml deploy/k8s

@@ -167,3 +167,26 @@ fn refine_both_directions() {
     assert!(down["faces_out"].as_u64().unwrap().abs_diff(400) <= 4);
     fails_with(&["refine", s(&input), "-o", s(&out), "--etc", "1", "--rounds", "0"], "rounds");
 }
+
+#[test]
+fn predictor_drives_w_and_etc() {
+    let dir = tempdir("predict");
+    let input = dir.join("blob.obj");
+    assert!(meshlod(&["generate", "blob", "-o", s(&input), "--resolution", "20"]).status.success());
+    let p = ok_json(&["predict", s(&input), "--ratio", "0.9", "--json"]);
+    let w = p["w"].as_f64().unwrap();
+    assert!([0.0, 0.5, 1.0, 1.5, 2.0].contains(&w), "{p}");
+    let total: f64 = p["probabilities"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).sum();
+    assert!((total - 1.0).abs() < 1e-4);
+    assert!(p["etc"].as_f64().unwrap() > 0.0 && !p["model_version"].as_str().unwrap().is_empty());
+    let out = dir.join("out.ply");
+    let simplified = ok_json(&["simplify", s(&input), "-o", s(&out), "--ratio", "0.9", "--w", "auto", "--json"]);
+    assert_eq!(simplified["w_source"], "predicted");
+    assert_eq!(simplified["w"], p["w"]);
+    let refined = ok_json(&["refine", s(&input), "-o", s(&out), "--faces", "10000", "--etc", "auto", "--json"]);
+    assert_eq!(refined["etc_source"], "predicted");
+    assert!(refined["faces_out"].as_u64().unwrap() > refined["faces_in"].as_u64().unwrap());
+    fails_with(&["refine", s(&input), "-o", s(&out), "--etc", "auto"], "--faces");
+    fails_with(&["simplify", s(&input), "-o", s(&out), "--w", "sometimes"], "neither a number nor 'auto'");
+    fails_with(&["predict", s(&input), "--ratio", "3"], "ratio");
+}

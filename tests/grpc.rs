@@ -77,7 +77,8 @@ fn blob() -> Mesh {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn every_rpc_over_loopback() {
-    let server = TestServer::start(ServerConfig::default()).await;
+    let predictor = std::sync::Arc::new(meshlod_service::predict::load(None).unwrap());
+    let server = TestServer::start(ServerConfig { predictor: Some(predictor), ..Default::default() }).await;
     let mut client = server.client().await;
     let mesh = blob();
 
@@ -129,15 +130,67 @@ async fn every_rpc_over_loopback() {
         .into_inner();
     assert!(from_file.stats.unwrap().faces_out <= 500);
 
-    // Predict: present in the contract; this build has no model yet and says so.
+    // Predict from a mesh, and from features alone.
     let predicted = client
         .predict(proto::PredictRequest {
             subject: Some(proto::predict_request::Subject::Input(input(&mesh).unwrap())),
-            target_ratio: Some(0.5),
+            target_ratio: Some(0.9),
             ..Default::default()
         })
-        .await;
-    assert!(matches!(predicted, Err(s) if s.code() == Code::Unimplemented));
+        .await
+        .unwrap()
+        .into_inner();
+    assert!(predicted.classes.contains(&predicted.w));
+    assert!((predicted.probabilities.iter().sum::<f32>() - 1.0).abs() < 1e-4);
+    assert!(predicted.etc > 0.0 && !predicted.model_version.is_empty());
+    let features = meshlod_engine::features::shape_features(&mesh);
+    let from_features = client
+        .predict(proto::PredictRequest {
+            subject: Some(proto::predict_request::Subject::Features(proto::ShapeFeatures {
+                values: features.to_vec(),
+            })),
+            target_faces: Some((mesh.face_count() / 10) as u32),
+            target_ratio: Some(0.9),
+        })
+        .await
+        .unwrap()
+        .into_inner();
+    assert_eq!(from_features.w, predicted.w);
+    let bad = client
+        .predict(proto::PredictRequest {
+            subject: Some(proto::predict_request::Subject::Features(proto::ShapeFeatures { values: vec![1.0; 3] })),
+            target_faces: Some(10),
+            target_ratio: Some(0.5),
+        })
+        .await
+        .unwrap_err();
+    assert!(bad.code() == Code::InvalidArgument && bad.message().starts_with("features.values"), "{bad:?}");
+
+    // w chosen by the predictor.
+    let auto = client
+        .simplify(proto::SimplifyRequest {
+            input: input(&mesh),
+            options: Some(proto::SimplifyOptions { target_ratio: Some(0.9), w_auto: true, ..Default::default() }),
+        })
+        .await
+        .unwrap()
+        .into_inner()
+        .stats
+        .unwrap();
+    assert_eq!(auto.w_source, proto::WSource::Predicted as i32);
+    assert_eq!(auto.w, predicted.w);
+    assert_eq!(auto.model_version, predicted.model_version);
+    let etc_auto = client
+        .refine(proto::RefineRequest {
+            input: input(&mesh),
+            target_faces: Some(2 * mesh.face_count() as u32),
+            etc_auto: true,
+            ..Default::default()
+        })
+        .await
+        .unwrap()
+        .into_inner();
+    assert!(etc_auto.stats.unwrap().faces_out > mesh.face_count() as u32);
     server.stop().await;
 }
 
@@ -336,6 +389,14 @@ async fn health_reflection_and_token() {
 
     let mut client = MeshLodClient::new(channel);
     let denied = client.simplify(simplify_request(&procedural::icosphere(2), 0.5)).await.unwrap_err();
+    // Without a model, Predict says so instead of guessing.
+    let mut predict = tonic::Request::new(proto::PredictRequest {
+        subject: Some(proto::predict_request::Subject::Input(input(&procedural::icosphere(1)).unwrap())),
+        target_ratio: Some(0.5),
+        ..Default::default()
+    });
+    predict.metadata_mut().insert("authorization", "Bearer s3cret".parse().unwrap());
+    assert_eq!(client.predict(predict).await.unwrap_err().code(), Code::FailedPrecondition);
     assert_eq!(denied.code(), Code::Unauthenticated);
     let mut request = tonic::Request::new(simplify_request(&procedural::icosphere(2), 0.5));
     request.metadata_mut().insert("authorization", "Bearer s3cret".parse().unwrap());

@@ -8,6 +8,7 @@
 pub mod bvh;
 pub mod datasets;
 pub mod error;
+pub mod features;
 pub mod hausdorff;
 pub mod io;
 pub mod mesh;
@@ -16,7 +17,7 @@ pub mod pm_format;
 pub mod procedural;
 pub mod quadric;
 pub mod refine;
-mod rng;
+pub mod rng;
 pub mod simplify;
 pub mod topology;
 pub mod validate;

@@ -109,6 +109,22 @@ enum Command {
     Client(crate::remote::ClientArgs),
     /// Run many jobs from a manifest (JSON lines), locally or against a server.
     Batch(crate::batch::BatchArgs),
+    /// Predict w and ETC for a mesh and a target with the shipped (or $MESHLOD_MODEL_DIR) model.
+    Predict {
+        /// Input mesh.
+        input: PathBuf,
+        /// Fraction of faces to remove.
+        #[arg(long, conflicts_with = "faces", required_unless_present = "faces")]
+        ratio: Option<f64>,
+        /// Target face count.
+        #[arg(long)]
+        faces: Option<usize>,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Generate training samples for the predictor (features, errors of every w, exact ETCs).
+    Samples(crate::samples::SamplesArgs),
     /// Run the main job on a built-in mesh: generate, validate, measure. Needs no files.
     Demo {
         /// Directory to write the demo meshes into (default: a temporary directory).
@@ -137,9 +153,9 @@ pub(crate) struct SimplifyArgs {
     #[arg(long, value_enum, default_value_t = MetricArg::Qfvp)]
     pub(crate) metric: MetricArg,
     /// QFVP exponent w in [0, 2] (0 is plain QEM; the lowest error on most shared meshes, see
-    /// docs/simplify-report.md).
-    #[arg(long, default_value_t = 0.0)]
-    pub(crate) w: f64,
+    /// docs/simplify-report.md), or `auto` for the predictor's choice.
+    #[arg(long, default_value = "0")]
+    pub(crate) w: Auto,
     /// Placement of the merged vertex.
     #[arg(long, value_enum, default_value_t = PlacementArg::Optimal)]
     pub(crate) placement: PlacementArg,
@@ -170,9 +186,10 @@ pub(crate) struct RefineArgs {
     /// Output mesh (.obj or .ply).
     #[arg(short, long)]
     pub(crate) output: PathBuf,
-    /// Energy threshold coefficient: threshold = ETC × mean face energy.
-    #[arg(long, required_unless_present = "faces", conflicts_with = "faces")]
-    pub(crate) etc: Option<f64>,
+    /// Energy threshold coefficient: threshold = ETC × mean face energy; `auto` (with --faces) takes
+    /// the predictor's estimate instead of the exact search.
+    #[arg(long, required_unless_present = "faces")]
+    pub(crate) etc: Option<Auto>,
     /// Target face count; the ETC reaching it is searched and reported.
     #[arg(long)]
     pub(crate) faces: Option<usize>,
@@ -227,7 +244,17 @@ pub(crate) fn refine_report(args: &RefineArgs) -> Result<serde_json::Value> {
         (None, Some(n)) if n < mesh.face_count() => RefineMode::Simplify,
         (None, _) => RefineMode::Subdivide,
     };
-    let options = RefineOptions { etc: args.etc, target_faces: args.faces, mode, rounds: args.rounds, cancel: None };
+    let (etc, target_faces, model_version) = match (args.etc, args.faces) {
+        (Some(Auto::Value(_)), Some(_)) => bail!("give --etc or --faces, not both (or --etc auto with --faces)"),
+        (Some(Auto::Value(e)), None) => (Some(e), None, None),
+        (Some(Auto::Auto), Some(n)) => {
+            let advice = meshlod_service::predict::advise(&predictor()?, &mesh, n)?;
+            (Some(advice.etc), None, Some(advice.model_version))
+        }
+        (Some(Auto::Auto), None) => bail!("--etc auto needs --faces (the target the ETC is predicted for)"),
+        (None, faces) => (None, faces, None),
+    };
+    let options = RefineOptions { etc, target_faces, mode, rounds: args.rounds, cancel: None };
     let result = refine(&mesh, &options)?;
     write_mesh(&args.output, &result.mesh)?;
     let stats = &result.stats;
@@ -239,6 +266,8 @@ pub(crate) fn refine_report(args: &RefineArgs) -> Result<serde_json::Value> {
         "mode": stats.mode,
         "rounds": stats.rounds,
         "split_edges": stats.split_edges,
+        "etc_source": if model_version.is_some() { "predicted" } else if args.etc.is_some() { "given" } else { "searched" },
+        "model_version": model_version,
         "collapses": stats.collapses,
         "seconds": stats.seconds,
     });
@@ -251,6 +280,68 @@ pub(crate) fn refine_report(args: &RefineArgs) -> Result<serde_json::Value> {
         report["reference_max_diag_pct"] = json!(d.hausdorff_diag_pct);
     }
     Ok(report)
+}
+
+/// A number, or `auto` for the predictor's choice.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Auto {
+    Auto,
+    Value(f64),
+}
+
+impl std::str::FromStr for Auto {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if s.eq_ignore_ascii_case("auto") {
+            return Ok(Auto::Auto);
+        }
+        s.parse::<f64>().map(Auto::Value).map_err(|_| format!("'{s}' is neither a number nor 'auto'"))
+    }
+}
+
+/// The predictor: the model in `$MESHLOD_MODEL_DIR` if set, else the one built in.
+pub(crate) fn predictor() -> Result<meshlod_predictor::Predictor> {
+    let dir = std::env::var_os("MESHLOD_MODEL_DIR").map(PathBuf::from);
+    meshlod_service::predict::load(dir.as_deref()).context("loading the predictor model")
+}
+
+fn run_predict(input: &Path, ratio: Option<f64>, faces: Option<usize>, json: bool) -> Result<()> {
+    if let Some(r) = ratio
+        && !(0.0..1.0).contains(&r)
+    {
+        bail!("--ratio {r} is outside [0, 1): it is the fraction of faces removed");
+    }
+    let mesh = meshlod_engine::simplify::prepare(&load(input)?).0;
+    let target =
+        meshlod_service::predict::target_faces(mesh.face_count(), faces, ratio).context("give --ratio or --faces")?;
+    let started = Instant::now();
+    let advice = meshlod_service::predict::advise(&predictor()?, &mesh, target)?;
+    let report = json!({
+        "faces_in": mesh.face_count(),
+        "target_faces": target,
+        "w": advice.w.w,
+        "probabilities": advice.w.probabilities,
+        "classes": advice.w.classes,
+        "etc": advice.etc,
+        "etc_mode": if target > mesh.face_count() { "subdivide" } else { "simplify" },
+        "model_version": advice.model_version,
+        "seconds": started.elapsed().as_secs_f64(),
+    });
+    if json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!(
+            "w = {} (probabilities {:?} for {:?}), ETC ≈ {:.4} for {} faces ({}), model {}",
+            advice.w.w,
+            advice.w.probabilities,
+            advice.w.classes,
+            advice.etc,
+            target,
+            report["etc_mode"],
+            advice.model_version
+        );
+    }
+    Ok(())
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -280,13 +371,13 @@ pub(crate) enum BoundaryArg {
 }
 
 impl SimplifyArgs {
-    pub(crate) fn options(&self) -> SimplifyOptions {
+    pub(crate) fn options(&self, w: f64) -> SimplifyOptions {
         SimplifyOptions {
             target_faces: self.faces,
             target_ratio: if self.faces.is_some() { self.ratio } else { Some(self.ratio.unwrap_or(0.5)) },
             max_error: self.max_error,
             metric: match self.metric {
-                MetricArg::Qfvp => Metric::Qfvp { w: self.w },
+                MetricArg::Qfvp => Metric::Qfvp { w },
                 MetricArg::Qem => Metric::Qem,
                 MetricArg::Melax => Metric::Melax,
             },
@@ -337,7 +428,16 @@ pub(crate) fn run_simplify(args: SimplifyArgs) -> Result<()> {
 /// Runs a local simplification and returns its JSON report.
 pub(crate) fn simplify_report(args: &SimplifyArgs) -> Result<serde_json::Value> {
     let mesh = load(&args.input)?;
-    let options = args.options();
+    let (w, model_version) = match args.w {
+        Auto::Value(w) => (w, None),
+        Auto::Auto => {
+            let target = meshlod_service::predict::target_faces(mesh.face_count(), args.faces, args.ratio)
+                .unwrap_or(mesh.face_count() / 2);
+            let advice = meshlod_service::predict::advise(&predictor()?, &mesh, target)?;
+            (advice.w.w, Some(advice.model_version))
+        }
+    };
+    let options = args.options(w);
     let result = simplify(&mesh, &options)?;
     write_mesh(&args.output, &result.mesh)?;
     let stats = &result.stats;
@@ -348,6 +448,8 @@ pub(crate) fn simplify_report(args: &SimplifyArgs) -> Result<serde_json::Value> 
         "vertices_out": stats.vertices_out,
         "metric": options.metric.name(),
         "w": options.metric.w(),
+        "w_source": if model_version.is_some() { "predicted" } else { "given" },
+        "model_version": model_version,
         "placement": options.placement,
         "normals": options.normals,
         "boundary": options.boundary,
@@ -512,6 +614,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Serve(args) => crate::remote::serve(args)?,
         Command::Client(args) => crate::remote::client(args)?,
         Command::Batch(args) => crate::batch::run(args)?,
+        Command::Samples(args) => crate::samples::run(args)?,
+        Command::Predict { input, ratio, faces, json } => run_predict(&input, ratio, faces, json)?,
         Command::Demo { out_dir } => demo(out_dir)?,
     }
     Ok(())

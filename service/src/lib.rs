@@ -4,6 +4,7 @@
 
 pub mod convert;
 pub mod metrics;
+pub mod predict;
 pub mod server;
 
 /// Code generated from `proto/meshlod/v1/meshlod.proto`.

@@ -6,6 +6,7 @@
 mod batch;
 mod commands;
 mod remote;
+mod samples;
 
 use std::process::ExitCode;
 

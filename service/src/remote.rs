@@ -16,7 +16,7 @@ use serde_json::json;
 use tonic::codec::CompressionEncoding;
 use tonic::transport::{Channel, Endpoint};
 
-use crate::commands::{BoundaryArg, MetricArg, ModeArg, NormalsArg, PlacementArg, RefineArgs, SimplifyArgs};
+use crate::commands::{Auto, BoundaryArg, MetricArg, ModeArg, NormalsArg, PlacementArg, RefineArgs, SimplifyArgs};
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub(crate) enum LogFormat {
@@ -57,6 +57,9 @@ pub(crate) struct ServeArgs {
     /// Log format.
     #[arg(long, env = "MESHLOD_LOG_FORMAT", value_enum, default_value_t = LogFormat::Text)]
     log_format: LogFormat,
+    /// Predictor model folder (predictor.onnx + metadata.json); default: the model built in.
+    #[arg(long, env = "MESHLOD_MODEL_DIR")]
+    model_dir: Option<PathBuf>,
 }
 
 fn init_logging(format: LogFormat) {
@@ -78,7 +81,10 @@ pub(crate) fn serve(args: ServeArgs) -> Result<()> {
     } else {
         Some(args.metrics_listen.parse().with_context(|| format!("--metrics-listen {}", args.metrics_listen))?)
     };
+    let predictor = meshlod_service::predict::load(args.model_dir.as_deref()).context("loading the predictor model")?;
+    tracing::info!(model = %predictor.metadata().model_version, "predictor loaded");
     let config = ServerConfig {
+        predictor: Some(std::sync::Arc::new(predictor)),
         listen: args.listen,
         metrics_listen,
         max_concurrent: args.max_concurrent.unwrap_or(defaults.max_concurrent),
@@ -172,8 +178,11 @@ pub(crate) fn simplify_request(args: &SimplifyArgs) -> Result<proto::SimplifyReq
                 MetricArg::Qem => proto::Metric::Qem,
                 MetricArg::Melax => proto::Metric::Melax,
             } as i32,
-            w: Some(args.w),
-            w_auto: false,
+            w: match args.w {
+                Auto::Value(w) => Some(w),
+                Auto::Auto => None,
+            },
+            w_auto: args.w == Auto::Auto,
             placement: match args.placement {
                 PlacementArg::Optimal => proto::Placement::Optimal,
                 PlacementArg::Paper => proto::Placement::Paper,
@@ -231,9 +240,12 @@ pub(crate) async fn remote_refine(
     };
     let request = proto::RefineRequest {
         input: Some(input_of(&args.input)?),
-        etc: args.etc,
+        etc: match args.etc {
+            Some(Auto::Value(e)) => Some(e),
+            _ => None,
+        },
         target_faces: args.faces.map(|n| n as u32),
-        etc_auto: false,
+        etc_auto: args.etc == Some(Auto::Auto),
         mode: mode as i32,
         rounds: Some(args.rounds),
     };

@@ -52,6 +52,8 @@ pub struct ServerConfig {
     pub tls: Option<(PathBuf, PathBuf)>,
     /// Required bearer token (`authorization: Bearer <token>`), if any.
     pub token: Option<String>,
+    /// The parameter predictor (`None`: Predict, w_auto and etc_auto answer FAILED_PRECONDITION).
+    pub predictor: Option<Arc<meshlod_predictor::Predictor>>,
 }
 
 impl Default for ServerConfig {
@@ -68,6 +70,7 @@ impl Default for ServerConfig {
             limits: MeshLimits::default(),
             tls: None,
             token: None,
+            predictor: None,
         }
     }
 }
@@ -182,6 +185,7 @@ fn require<'a, T>(value: &'a Option<T>, field: &str) -> Result<&'a T, Status> {
 fn run_simplify(
     request: &proto::SimplifyRequest,
     limits: &MeshLimits,
+    predictor: Option<&meshlod_predictor::Predictor>,
     cancel: Arc<AtomicBool>,
     force_progressive: bool,
 ) -> Result<
@@ -190,16 +194,21 @@ fn run_simplify(
 > {
     let default_options = proto::SimplifyOptions::default();
     let o = request.options.as_ref().unwrap_or(&default_options);
-    if o.w_auto {
-        return Err(Status::failed_precondition(
-            "options.w_auto: this server has no predictor model yet; give options.w",
-        ));
-    }
-    let w = o.w.unwrap_or(0.0);
+    let mesh = mesh_from_input(request.input.as_ref(), "input", limits)?;
+    let (w, w_source, model_version) = if o.w_auto {
+        let predictor = predictor
+            .ok_or_else(|| Status::failed_precondition("options.w_auto: this server runs without a predictor model"))?;
+        let target =
+            crate::predict::target_faces(mesh.face_count(), o.target_faces.map(|n| n as usize), o.target_ratio)
+                .unwrap_or(mesh.face_count() / 2);
+        let advice = crate::predict::advise(predictor, &mesh, target).map_err(|e| Status::internal(e.to_string()))?;
+        (advice.w.w, proto::WSource::Predicted, advice.model_version)
+    } else {
+        (o.w.unwrap_or(0.0), proto::WSource::Given, String::new())
+    };
     let mut options = convert::simplify_options(o, w)?;
     options.record_progressive |= force_progressive;
     options.cancel = Some(cancel);
-    let mesh = mesh_from_input(request.input.as_ref(), "input", limits)?;
     let result = simplify(&mesh, &options).map_err(|e| engine_status(e, "options"))?;
     let hausdorff = if o.compute_hausdorff {
         let d =
@@ -224,8 +233,8 @@ fn run_simplify(
         stop_reason: serde_json_name(&s.stop_reason),
         metric: options.metric.name().to_string(),
         w: options.metric.w().unwrap_or(0.0),
-        w_source: proto::WSource::Given as i32,
-        model_version: String::new(),
+        w_source: w_source as i32,
+        model_version,
         max_collapse_error: s.max_collapse_error,
         seconds: s.seconds,
     };
@@ -250,9 +259,11 @@ impl MeshLod for MeshLodService {
     ) -> Result<Response<proto::SimplifyResponse>, Status> {
         let request = request.into_inner();
         let limits = self.config.limits;
+        let predictor = self.config.predictor.clone();
         let response = self
             .run("Simplify", move |cancel| {
-                let (result, stats, hausdorff, _) = run_simplify(&request, &limits, cancel, false)?;
+                let (result, stats, hausdorff, _) =
+                    run_simplify(&request, &limits, predictor.as_deref(), cancel, false)?;
                 Ok(proto::SimplifyResponse {
                     mesh: Some(mesh_to_proto(&result.mesh)),
                     progressive: result.progressive.as_ref().map(progressive_to_proto),
@@ -272,8 +283,10 @@ impl MeshLod for MeshLodService {
     ) -> Result<Response<Self::SimplifyStreamStream>, Status> {
         let request = request.into_inner();
         let limits = self.config.limits;
-        let (result, stats, _, _) =
-            self.run("SimplifyStream", move |cancel| run_simplify(&request, &limits, cancel, true)).await?;
+        let predictor = self.config.predictor.clone();
+        let (result, stats, _, _) = self
+            .run("SimplifyStream", move |cancel| run_simplify(&request, &limits, predictor.as_deref(), cancel, true))
+            .await?;
         let pm = result.progressive.expect("progressive forced on");
         // Splits are ~20–40 bytes encoded; batch so each message stays under the configured size.
         let per_batch = (self.config.stream_message_bytes / 48).max(1);
@@ -300,15 +313,24 @@ impl MeshLod for MeshLodService {
 
     async fn refine(&self, request: Request<proto::RefineRequest>) -> Result<Response<proto::RefineResponse>, Status> {
         let request = request.into_inner();
+        let predictor = self.config.predictor.clone();
         let limits = self.config.limits;
         let response = self
             .run("Refine", move |cancel| {
-                if request.etc_auto {
-                    return Err(Status::failed_precondition(
-                        "etc_auto: this server has no predictor model yet; give etc or target_faces",
-                    ));
-                }
                 let mesh = mesh_from_input(request.input.as_ref(), "input", &limits)?;
+                let mut request = request;
+                if request.etc_auto {
+                    let predictor = predictor.as_deref().ok_or_else(|| {
+                        Status::failed_precondition("etc_auto: this server runs without a predictor model")
+                    })?;
+                    let target = request
+                        .target_faces
+                        .ok_or_else(|| Status::invalid_argument("target_faces: etc_auto needs a target face count"))?;
+                    let advice = crate::predict::advise(predictor, &mesh, target as usize)
+                        .map_err(|e| Status::internal(e.to_string()))?;
+                    request.etc = Some(advice.etc);
+                    request.target_faces = None;
+                }
                 let mode = match proto::RefineMode::try_from(request.mode) {
                     Ok(proto::RefineMode::Simplify) => RefineMode::Simplify,
                     Ok(proto::RefineMode::Subdivide) => RefineMode::Subdivide,
@@ -359,9 +381,64 @@ impl MeshLod for MeshLodService {
         &self,
         request: Request<proto::PredictRequest>,
     ) -> Result<Response<proto::PredictResponse>, Status> {
-        let _ = require(&request.get_ref().subject, "subject")?;
-        self.metrics.record("Predict", tonic::Code::Unimplemented, std::time::Duration::ZERO);
-        Err(Status::unimplemented("Predict: the predictor model is not part of this build yet"))
+        let request = request.into_inner();
+        let limits = self.config.limits;
+        let Some(predictor) = self.config.predictor.clone() else {
+            self.metrics.record("Predict", tonic::Code::FailedPrecondition, std::time::Duration::ZERO);
+            return Err(Status::failed_precondition("this server runs without a predictor model"));
+        };
+        let response = self
+            .run("Predict", move |_cancel| {
+                let subject = require(&request.subject, "subject")?;
+                if let Some(r) = request.target_ratio
+                    && !(0.0..1.0).contains(&r)
+                {
+                    return Err(Status::invalid_argument(format!("target_ratio: {r} is outside [0, 1)")));
+                }
+                let (shape, faces_in) = match subject {
+                    proto::predict_request::Subject::Input(input) => {
+                        let mesh = mesh_from_input(Some(input), "input", &limits)?;
+                        (meshlod_engine::features::shape_features(&mesh), mesh.face_count())
+                    }
+                    proto::predict_request::Subject::Features(f) => {
+                        let shape: [f32; 8] = f.values.as_slice().try_into().map_err(|_| {
+                            Status::invalid_argument(format!(
+                                "features.values: expected the 8 shape features {:?}, got {} values",
+                                meshlod_engine::features::SHAPE_FEATURE_NAMES,
+                                f.values.len()
+                            ))
+                        })?;
+                        // Without a mesh, the face count comes from the target: faces and ratio.
+                        let faces_in = request
+                            .target_faces
+                            .zip(request.target_ratio)
+                            .map(|(t, r)| (t as f64 / (1.0 - r)).round() as usize)
+                            .ok_or_else(|| {
+                                Status::invalid_argument(
+                                    "target_ratio: with features, give target_faces and target_ratio",
+                                )
+                            })?;
+                        (shape, faces_in)
+                    }
+                };
+                let target = crate::predict::target_faces(
+                    faces_in,
+                    request.target_faces.map(|n| n as usize),
+                    request.target_ratio,
+                )
+                .ok_or_else(|| Status::invalid_argument("target_faces: give target_faces or target_ratio"))?;
+                let advice = crate::predict::advise_features(&predictor, &shape, faces_in, target)
+                    .map_err(|e| Status::invalid_argument(e.to_string()))?;
+                Ok(proto::PredictResponse {
+                    w: advice.w.w,
+                    probabilities: advice.w.probabilities,
+                    classes: advice.w.classes,
+                    etc: advice.etc,
+                    model_version: advice.model_version,
+                })
+            })
+            .await?;
+        Ok(Response::new(response))
     }
 }
 
