@@ -190,3 +190,42 @@ fn predictor_drives_w_and_etc() {
     fails_with(&["simplify", s(&input), "-o", s(&out), "--w", "sometimes"], "neither a number nor 'auto'");
     fails_with(&["predict", s(&input), "--ratio", "3"], "ratio");
 }
+
+#[test]
+fn batch_runs_jobs_reports_each_and_resumes() {
+    let dir = tempdir("batch");
+    let input = dir.join("torus.obj");
+    assert!(meshlod(&["generate", "torus", "-o", s(&input), "--resolution", "16"]).status.success());
+    let manifest = dir.join("jobs.jsonl");
+    std::fs::write(
+        &manifest,
+        concat!(
+            "{\"op\": \"simplify\", \"input\": \"torus.obj\", \"output\": \"out/low.ply\", \"args\": [\"--ratio\", \"0.9\"]}\n",
+            "# comments and blank lines are ignored\n\n",
+            "{\"op\": \"refine\", \"input\": \"torus.obj\", \"output\": \"out/fine.obj\", \"args\": [\"--etc\", \"1.0\"]}\n",
+        ),
+    )
+    .unwrap();
+    let results = dir.join("results.jsonl");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["batch", s(&manifest), "--results", s(&results), "--quiet", "--jobs", "2"];
+        args.extend_from_slice(extra);
+        let out = meshlod(&args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let text = std::fs::read_to_string(&results).unwrap();
+        text.lines().map(|l| serde_json::from_str::<Value>(l).unwrap()).collect::<Vec<_>>()
+    };
+    let first = run(&[]);
+    assert_eq!(first.len(), 2);
+    assert!(first.iter().all(|r| r["status"] == "ok"), "{first:?}");
+    assert!(dir.join("out/low.ply").is_file() && dir.join("out/fine.obj").is_file());
+    // Resumable: up-to-date outputs are skipped, --force redoes them.
+    assert!(run(&[]).iter().all(|r| r["status"] == "skipped"));
+    assert!(run(&["--force"]).iter().all(|r| r["status"] == "ok"));
+    // A bad job is reported and fails the batch, without stopping the others.
+    std::fs::write(&manifest, "{\"op\": \"simplify\", \"input\": \"missing.obj\", \"output\": \"x.ply\"}\n").unwrap();
+    let out = meshlod(&["batch", s(&manifest), "--results", s(&results), "--quiet"]);
+    assert!(!out.status.success());
+    let text = std::fs::read_to_string(&results).unwrap();
+    assert!(text.contains("\"status\":\"error\"") && text.contains("missing.obj"), "{text}");
+}

@@ -102,6 +102,27 @@ async fn every_rpc_over_loopback() {
     let local = simplify(&mesh, &SimplifyOptions { target_ratio: Some(0.9), ..Default::default() }).unwrap();
     assert_eq!(local.mesh, out);
 
+    // The same request uploaded in small chunks (client streaming) gives the same result.
+    let unary = client.simplify(simplify_request(&mesh, 0.8)).await.unwrap().into_inner();
+    let whole = mesh_to_proto(&mesh);
+    let mut chunks = Vec::new();
+    for (i, (p, t)) in whole.positions.chunks(999).zip(whole.indices.chunks(1501)).enumerate() {
+        chunks.push(proto::MeshChunk {
+            options: (i == 0).then(|| proto::SimplifyOptions { target_ratio: Some(0.8), ..Default::default() }),
+            positions: p.to_vec(),
+            indices: t.to_vec(),
+        });
+    }
+    let sent_p: usize = chunks.iter().map(|c| c.positions.len()).sum();
+    let sent_i: usize = chunks.iter().map(|c| c.indices.len()).sum();
+    chunks.push(proto::MeshChunk {
+        options: None,
+        positions: whole.positions[sent_p..].to_vec(),
+        indices: whole.indices[sent_i..].to_vec(),
+    });
+    let uploaded = client.simplify_upload(tokio_stream::iter(chunks)).await.unwrap().into_inner();
+    assert_eq!(uploaded.mesh, unary.mesh);
+
     // Refine.
     let refined = client
         .refine(proto::RefineRequest { input: input(&mesh), etc: Some(1.0), ..Default::default() })
@@ -291,6 +312,10 @@ async fn invalid_requests_name_the_field() {
     let status = client.simplify(bad_file).await.unwrap_err();
     assert_eq!(status.code(), Code::InvalidArgument);
     assert!(status.message().starts_with("input.file") && status.message().contains("line 3"), "{}", status.message());
+    let too_big =
+        (0..20).map(|_| proto::MeshChunk { options: None, positions: vec![0.0; 3 * 400], indices: vec![0; 3 * 400] });
+    let status = client.simplify_upload(tokio_stream::iter(too_big)).await.unwrap_err();
+    assert!(status.code() == Code::InvalidArgument && status.message().contains("mesh too large"), "{status:?}");
     let refine = client
         .refine(proto::RefineRequest {
             input: input(&procedural::icosphere(1)),

@@ -26,18 +26,28 @@ fn percentile(sorted: &[Duration], p: f64) -> Duration {
     sorted[((sorted.len() as f64 - 1.0) * p).round() as usize]
 }
 
-async fn load(client: &MeshLodClient<Channel>, small: &proto::SimplifyRequest, concurrency: usize, total: usize) {
+/// One kind of request for the load loop.
+#[derive(Clone)]
+enum Call {
+    Simplify(proto::SimplifyRequest),
+    Predict(proto::PredictRequest),
+}
+
+async fn load(client: &MeshLodClient<Channel>, call: &Call, label: &str, concurrency: usize, total: usize) {
     let started = Instant::now();
     let mut tasks = Vec::new();
     for worker in 0..concurrency {
         let mut client = client.clone();
-        let small = small.clone();
+        let call = call.clone();
         let n = total / concurrency + usize::from(worker < total % concurrency);
         tasks.push(tokio::spawn(async move {
             let mut latencies = Vec::with_capacity(n);
             for _ in 0..n {
                 let t = Instant::now();
-                client.simplify(small.clone()).await.expect("simplify");
+                match &call {
+                    Call::Simplify(r) => drop(client.simplify(r.clone()).await.expect("simplify")),
+                    Call::Predict(r) => drop(client.predict(r.clone()).await.expect("predict")),
+                }
                 latencies.push(t.elapsed());
             }
             latencies
@@ -50,7 +60,7 @@ async fn load(client: &MeshLodClient<Channel>, small: &proto::SimplifyRequest, c
     let elapsed = started.elapsed();
     all.sort();
     println!(
-        "small Simplify (icosphere 1280 → 640 faces), concurrency {concurrency}: {} requests, {:.0} req/s, p50 {:.2} ms, p99 {:.2} ms",
+        "{label}, concurrency {concurrency}: {} requests, {:.0} req/s, p50 {:.2} ms, p99 {:.2} ms",
         all.len(),
         all.len() as f64 / elapsed.as_secs_f64(),
         percentile(&all, 0.5).as_secs_f64() * 1e3,
@@ -63,14 +73,24 @@ fn main() {
     runtime.block_on(async {
         let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.expect("bind");
         let addr = listener.local_addr().expect("address");
-        let config = ServerConfig { max_queue: 64, ..Default::default() };
+        let predictor = std::sync::Arc::new(meshlod_service::predict::load(None).expect("model"));
+        let config = ServerConfig { max_queue: 64, predictor: Some(predictor), ..Default::default() };
         tokio::spawn(serve_with_listener(listener, config, std::future::pending()));
         tokio::time::sleep(Duration::from_millis(200)).await;
         let channel = Channel::from_shared(format!("http://{addr}")).expect("uri").connect().await.expect("connect");
         let client = MeshLodClient::new(channel).max_decoding_message_size(usize::MAX).max_encoding_message_size(usize::MAX);
-        let small = request(&procedural::icosphere(3), 0.5);
+        let shape = meshlod_engine::features::shape_features(&procedural::icosphere(3));
+        let predict = Call::Predict(proto::PredictRequest {
+            subject: Some(proto::predict_request::Subject::Features(proto::ShapeFeatures { values: shape.to_vec() })),
+            target_faces: Some(1000),
+            target_ratio: Some(0.9),
+        });
         for concurrency in [1, 8, 32] {
-            load(&client, &small, concurrency, 400).await;
+            load(&client, &predict, "Predict (features)", concurrency, 4000).await;
+        }
+        let small = Call::Simplify(request(&procedural::icosphere(3), 0.5));
+        for concurrency in [1, 8, 32] {
+            load(&client, &small, "small Simplify (icosphere 1280 → 640 faces)", concurrency, 400).await;
         }
         let Some(dir) = meshlod_engine::datasets::shared_meshes_dir() else {
             eprintln!("!!! shared meshes not found (set MESHLOD_MESHES): bunny case skipped !!!");

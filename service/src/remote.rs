@@ -203,13 +203,43 @@ pub(crate) fn simplify_request(args: &SimplifyArgs) -> Result<proto::SimplifyReq
     })
 }
 
+/// Meshes whose positions and indices exceed this many bytes are uploaded in chunks.
+const UPLOAD_ABOVE_BYTES: usize = 32 << 20;
+/// Values (floats or indices) per upload chunk: 1 MiB of each.
+const CHUNK_VALUES: usize = 1 << 18;
+
+/// Splits a mesh into upload chunks; the options travel with the first.
+fn chunked(mesh: &proto::Mesh, options: Option<proto::SimplifyOptions>) -> Vec<proto::MeshChunk> {
+    let count = mesh.positions.len().max(mesh.indices.len()).div_ceil(CHUNK_VALUES).max(1);
+    (0..count)
+        .map(|i| {
+            let range = |len: usize| (i * CHUNK_VALUES).min(len)..((i + 1) * CHUNK_VALUES).min(len);
+            proto::MeshChunk {
+                options: if i == 0 { options.clone() } else { None },
+                positions: mesh.positions[range(mesh.positions.len())].to_vec(),
+                indices: mesh.indices[range(mesh.indices.len())].to_vec(),
+            }
+        })
+        .collect()
+}
+
 /// Runs one simplification on the server and writes its output; returns the JSON report.
 pub(crate) async fn remote_simplify(
     client: &mut MeshLodClient<Channel>,
     args: &SimplifyArgs,
     token: &Option<String>,
 ) -> Result<serde_json::Value> {
-    let response = client.simplify(with_token(simplify_request(args)?, token)?).await?.into_inner();
+    let request = simplify_request(args)?;
+    let response = match &request.input {
+        // Meshes over 32 MiB go up in 1 MiB chunks (SimplifyUpload) instead of one message.
+        Some(proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(m)) })
+            if 4 * (m.positions.len() + m.indices.len()) > UPLOAD_ABOVE_BYTES =>
+        {
+            let chunks = chunked(m, request.options.clone());
+            client.simplify_upload(with_token(tokio_stream::iter(chunks), token)?).await?.into_inner()
+        }
+        _ => client.simplify(with_token(request, token)?).await?.into_inner(),
+    };
     let mesh =
         mesh_from_proto(response.mesh.as_ref().context("response without mesh")?, "mesh", &MeshLimits::default())?;
     write_mesh(&args.output, &mesh)?;

@@ -311,6 +311,47 @@ impl MeshLod for MeshLodService {
         Ok(Response::new(ReceiverStream::new(rx)))
     }
 
+    async fn simplify_upload(
+        &self,
+        request: Request<tonic::Streaming<proto::MeshChunk>>,
+    ) -> Result<Response<proto::SimplifyResponse>, Status> {
+        let mut stream = request.into_inner();
+        let limits = self.config.limits;
+        let mut options = None;
+        let mut mesh = proto::Mesh::default();
+        while let Some(chunk) = stream.message().await? {
+            if options.is_none() {
+                options = Some(chunk.options.unwrap_or_default());
+            }
+            mesh.positions.extend_from_slice(&chunk.positions);
+            mesh.indices.extend_from_slice(&chunk.indices);
+            if mesh.positions.len() / 3 > limits.max_vertices || mesh.indices.len() / 3 > limits.max_faces {
+                return Err(Status::invalid_argument(format!(
+                    "input: mesh too large: the upload passed {} vertices or {} faces",
+                    limits.max_vertices, limits.max_faces
+                )));
+            }
+        }
+        let request = proto::SimplifyRequest {
+            input: Some(proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(mesh)) }),
+            options,
+        };
+        let predictor = self.config.predictor.clone();
+        let response = self
+            .run("SimplifyUpload", move |cancel| {
+                let (result, stats, hausdorff, _) =
+                    run_simplify(&request, &limits, predictor.as_deref(), cancel, false)?;
+                Ok(proto::SimplifyResponse {
+                    mesh: Some(mesh_to_proto(&result.mesh)),
+                    progressive: result.progressive.as_ref().map(progressive_to_proto),
+                    stats: Some(stats),
+                    hausdorff,
+                })
+            })
+            .await?;
+        Ok(Response::new(response))
+    }
+
     async fn refine(&self, request: Request<proto::RefineRequest>) -> Result<Response<proto::RefineResponse>, Status> {
         let request = request.into_inner();
         let predictor = self.config.predictor.clone();
