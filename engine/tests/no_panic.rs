@@ -35,7 +35,7 @@ fn mutate(bytes: &[u8], rng: &mut SplitMix64) -> Vec<u8> {
         _ => {
             // replace a digit run with a huge or negative number
             if let Some(i) = out.iter().position(|b| b.is_ascii_digit()) {
-                let repl: &[u8] = if rng.next_u64() % 2 == 0 { b"4294967295999" } else { b"-7" };
+                let repl: &[u8] = if rng.next_u64().is_multiple_of(2) { b"4294967295999" } else { b"-7" };
                 out.splice(i..i + 1, repl.iter().copied());
             }
         }
@@ -126,5 +126,5 @@ fn random_triangle_soups_never_panic_any_algorithm() {
 }
 
 fn rng_bit(round: usize) -> bool {
-    round % 3 == 0
+    round.is_multiple_of(3)
 }
