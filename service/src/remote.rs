@@ -215,7 +215,7 @@ fn chunked(mesh: &proto::Mesh, options: Option<proto::SimplifyOptions>) -> Vec<p
         .map(|i| {
             let range = |len: usize| (i * CHUNK_VALUES).min(len)..((i + 1) * CHUNK_VALUES).min(len);
             proto::MeshChunk {
-                options: if i == 0 { options.clone() } else { None },
+                options: if i == 0 { options } else { None },
                 positions: mesh.positions[range(mesh.positions.len())].to_vec(),
                 indices: mesh.indices[range(mesh.indices.len())].to_vec(),
             }
@@ -235,7 +235,7 @@ pub(crate) async fn remote_simplify(
         Some(proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(m)) })
             if 4 * (m.positions.len() + m.indices.len()) > UPLOAD_ABOVE_BYTES =>
         {
-            let chunks = chunked(m, request.options.clone());
+            let chunks = chunked(m, request.options);
             client.simplify_upload(with_token(tokio_stream::iter(chunks), token)?).await?.into_inner()
         }
         _ => client.simplify(with_token(request, token)?).await?.into_inner(),
