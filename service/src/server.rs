@@ -129,6 +129,29 @@ impl MeshLodService {
         result
     }
 
+    /// One simplification answered in one message (Simplify and SimplifyUpload).
+    async fn simplify_unary(
+        &self,
+        method: &'static str,
+        request: proto::SimplifyRequest,
+    ) -> Result<Response<proto::SimplifyResponse>, Status> {
+        let limits = self.config.limits;
+        let predictor = self.config.predictor.clone();
+        let response = self
+            .run(method, move |cancel| {
+                let (result, stats, hausdorff, _) =
+                    run_simplify(&request, &limits, predictor.as_deref(), cancel, false)?;
+                Ok(proto::SimplifyResponse {
+                    mesh: Some(mesh_to_proto(&result.mesh)),
+                    progressive: result.progressive.as_ref().map(progressive_to_proto),
+                    stats: Some(stats),
+                    hausdorff,
+                })
+            })
+            .await?;
+        Ok(Response::new(response))
+    }
+
     async fn admit_and_run<T: Send + 'static>(
         &self,
         work: impl FnOnce(Arc<AtomicBool>) -> Result<T, Status> + Send + 'static,
@@ -257,22 +280,7 @@ impl MeshLod for MeshLodService {
         &self,
         request: Request<proto::SimplifyRequest>,
     ) -> Result<Response<proto::SimplifyResponse>, Status> {
-        let request = request.into_inner();
-        let limits = self.config.limits;
-        let predictor = self.config.predictor.clone();
-        let response = self
-            .run("Simplify", move |cancel| {
-                let (result, stats, hausdorff, _) =
-                    run_simplify(&request, &limits, predictor.as_deref(), cancel, false)?;
-                Ok(proto::SimplifyResponse {
-                    mesh: Some(mesh_to_proto(&result.mesh)),
-                    progressive: result.progressive.as_ref().map(progressive_to_proto),
-                    stats: Some(stats),
-                    hausdorff,
-                })
-            })
-            .await?;
-        Ok(Response::new(response))
+        self.simplify_unary("Simplify", request.into_inner()).await
     }
 
     type SimplifyStreamStream = ReceiverStream<Result<proto::SimplifyStreamMessage, Status>>;
@@ -336,20 +344,7 @@ impl MeshLod for MeshLodService {
             input: Some(proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(mesh)) }),
             options,
         };
-        let predictor = self.config.predictor.clone();
-        let response = self
-            .run("SimplifyUpload", move |cancel| {
-                let (result, stats, hausdorff, _) =
-                    run_simplify(&request, &limits, predictor.as_deref(), cancel, false)?;
-                Ok(proto::SimplifyResponse {
-                    mesh: Some(mesh_to_proto(&result.mesh)),
-                    progressive: result.progressive.as_ref().map(progressive_to_proto),
-                    stats: Some(stats),
-                    hausdorff,
-                })
-            })
-            .await?;
-        Ok(Response::new(response))
+        self.simplify_unary("SimplifyUpload", request).await
     }
 
     async fn refine(&self, request: Request<proto::RefineRequest>) -> Result<Response<proto::RefineResponse>, Status> {

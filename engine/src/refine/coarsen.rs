@@ -99,6 +99,7 @@ pub(crate) fn coarsen(
     let mut ring1 = Vec::new();
     let mut ring2 = Vec::new();
     let mut touched: Vec<u32> = Vec::new();
+    let mut faces: Vec<u32> = Vec::new();
     while faces_alive > target_faces {
         pops += 1;
         if pops.is_multiple_of(CANCEL_CHECK_INTERVAL)
@@ -158,12 +159,16 @@ pub(crate) fn coarsen(
         for &v in &touched {
             energy[v as usize] = energy_of(&state, &mean_length, v, &mut scratch);
         }
+        // Each face around the touched vertices is re-queued once.
+        faces.clear();
         for &v in &touched {
-            for i in 0..state.vertex_faces[v as usize].len() {
-                let g = state.vertex_faces[v as usize][i];
-                face_version[g as usize] = face_version[g as usize].wrapping_add(1);
-                heap.push((key(face_energy(&state, &energy, g)), Reverse(g), face_version[g as usize]));
-            }
+            faces.extend_from_slice(&state.vertex_faces[v as usize]);
+        }
+        faces.sort_unstable();
+        faces.dedup();
+        for &g in &faces {
+            face_version[g as usize] = face_version[g as usize].wrapping_add(1);
+            heap.push((key(face_energy(&state, &energy, g)), Reverse(g), face_version[g as usize]));
         }
     }
     Ok(Coarsened { mesh: state.output_mesh(), collapses, popped })
