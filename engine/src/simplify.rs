@@ -651,17 +651,22 @@ impl<'o> State<'o> {
         record
     }
 
-    fn push_edges_of(&mut self, v: u32, heap: &mut BinaryHeap<HeapEntry>, neighbours: &mut Vec<u32>) {
-        neighbours.clear();
+    /// The one-ring of `v`, sorted, into `out`.
+    pub(crate) fn neighbours(&self, v: u32, out: &mut Vec<u32>) {
+        out.clear();
         for &f in &self.vertex_faces[v as usize] {
             for u in self.triangles[f as usize] {
                 if u != v {
-                    neighbours.push(u);
+                    out.push(u);
                 }
             }
         }
-        neighbours.sort_unstable();
-        neighbours.dedup();
+        out.sort_unstable();
+        out.dedup();
+    }
+
+    fn push_edges_of(&mut self, v: u32, heap: &mut BinaryHeap<HeapEntry>, neighbours: &mut Vec<u32>) {
+        self.neighbours(v, neighbours);
         for &u in neighbours.iter() {
             self.push_edge(v, u, heap);
         }

@@ -36,21 +36,8 @@ pub(crate) struct Coarsened {
     pub popped: Vec<f64>,
 }
 
-fn neighbours(state: &State, v: u32, out: &mut Vec<u32>) {
-    out.clear();
-    for &f in &state.vertex_faces[v as usize] {
-        for u in state.triangles[f as usize] {
-            if u != v {
-                out.push(u);
-            }
-        }
-    }
-    out.sort_unstable();
-    out.dedup();
-}
-
 fn mean_edge_length(state: &State, v: u32, scratch: &mut Vec<u32>) -> f64 {
-    neighbours(state, v, scratch);
+    state.neighbours(v, scratch);
     if scratch.is_empty() {
         return 0.0;
     }
@@ -79,7 +66,7 @@ pub(crate) fn coarsen(
     let mut mean_length: Vec<f64> =
         (0..vertex_count as u32).map(|v| mean_edge_length(&state, v, &mut scratch)).collect();
     let energy_of = |state: &State, mean_length: &[f64], v: u32, scratch: &mut Vec<u32>| {
-        neighbours(state, v, scratch);
+        state.neighbours(v, scratch);
         vertex_energy(state.point(v), scratch.iter().map(|&u| (state.point(u), mean_length[u as usize])))
     };
     let mut energy: Vec<f64> =
@@ -143,7 +130,7 @@ pub(crate) fn coarsen(
             survivor = second.survivor;
         }
         // Local energy update: mean lengths of the survivor and its ring, energies of the 2-ring.
-        neighbours(&state, survivor, &mut ring1);
+        state.neighbours(survivor, &mut ring1);
         touched.clear();
         touched.push(survivor);
         touched.extend_from_slice(&ring1);
@@ -151,7 +138,7 @@ pub(crate) fn coarsen(
             mean_length[v as usize] = mean_edge_length(&state, v, &mut scratch);
         }
         for &v in &ring1 {
-            neighbours(&state, v, &mut ring2);
+            state.neighbours(v, &mut ring2);
             touched.extend_from_slice(&ring2);
         }
         touched.sort_unstable();
