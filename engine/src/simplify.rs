@@ -230,6 +230,9 @@ pub const MIN_TRIANGLE_QUALITY: f64 = 1e-3;
 /// below this (a fold of more than ~154°).
 pub const FOLD_DOT: f64 = -0.9;
 
+/// Fans up to this many faces are checked for folds pair by pair; larger ones by sorting.
+const SMALL_FAN: usize = 16;
+
 /// Times the queue is rebuilt from all remaining edges when it runs dry before the target: a
 /// candidate refused earlier may have become legal after its neighbourhood changed.
 pub const MAX_PASSES: usize = 4;
@@ -492,12 +495,7 @@ impl<'o> State<'o> {
             return false;
         }
         // Link condition: common neighbours are exactly the opposite vertices of the edge faces.
-        self.mark_stamp = self.mark_stamp.wrapping_add(1);
-        if self.mark_stamp == 0 {
-            self.mark.iter_mut().for_each(|m| *m = 0);
-            self.mark_stamp = 1;
-        }
-        let stamp = self.mark_stamp;
+        let stamp = self.next_stamp();
         for &f in &self.vertex_faces[a as usize] {
             for v in self.triangles[f as usize] {
                 self.mark[v as usize] = stamp;
@@ -574,14 +572,26 @@ impl<'o> State<'o> {
         // No fold: two faces of the new fan that share an edge must not turn back onto each other
         // (a sequence of small per-face normal changes can otherwise fold a pair over). Faces that
         // share the edge (merged vertex, x) are adjacent once the corners are sorted by x.
-        let mut corners = std::mem::take(&mut self.corner_scratch);
-        corners.clear();
-        corners.extend(fan.iter().enumerate().flat_map(|(i, &([x, y], _))| [(x, i as u32), (y, i as u32)]));
-        corners.sort_unstable();
-        let folded = corners
-            .windows(2)
-            .any(|w| w[0].0 == w[1].0 && fan[w[0].1 as usize].1.dot(fan[w[1].1 as usize].1) < FOLD_DOT);
-        self.corner_scratch = corners;
+        // Small fans (the usual valence) pairwise; large ones sorted, to stay O(n log n).
+        let folded = if fan.len() <= SMALL_FAN {
+            (0..fan.len()).any(|i| {
+                (i + 1..fan.len()).any(|j| {
+                    let ([a, b], ni) = fan[i];
+                    let ([c, d], nj) = fan[j];
+                    (a == c || a == d || b == c || b == d) && ni.dot(nj) < FOLD_DOT
+                })
+            })
+        } else {
+            let mut corners = std::mem::take(&mut self.corner_scratch);
+            corners.clear();
+            corners.extend(fan.iter().enumerate().flat_map(|(i, &([x, y], _))| [(x, i as u32), (y, i as u32)]));
+            corners.sort_unstable();
+            let folded = corners
+                .windows(2)
+                .any(|w| w[0].0 == w[1].0 && fan[w[0].1 as usize].1.dot(fan[w[1].1 as usize].1) < FOLD_DOT);
+            self.corner_scratch = corners;
+            folded
+        };
         if folded {
             self.fan_scratch = fan;
             return false;
@@ -651,6 +661,16 @@ impl<'o> State<'o> {
         record
     }
 
+    /// A fresh stamp for the scratch marks (every mark is older).
+    fn next_stamp(&mut self) -> u32 {
+        self.mark_stamp = self.mark_stamp.wrapping_add(2);
+        if self.mark_stamp < 2 {
+            self.mark.iter_mut().for_each(|m| *m = 0);
+            self.mark_stamp = 2;
+        }
+        self.mark_stamp
+    }
+
     /// The one-ring of `v`, sorted, into `out`.
     pub(crate) fn neighbours(&self, v: u32, out: &mut Vec<u32>) {
         out.clear();
@@ -666,7 +686,17 @@ impl<'o> State<'o> {
     }
 
     fn push_edges_of(&mut self, v: u32, heap: &mut BinaryHeap<HeapEntry>, neighbours: &mut Vec<u32>) {
-        self.neighbours(v, neighbours);
+        // Unique neighbours by mark stamps (no sort: the heap's total order makes push order moot).
+        let stamp = self.next_stamp();
+        neighbours.clear();
+        for &f in &self.vertex_faces[v as usize] {
+            for u in self.triangles[f as usize] {
+                if u != v && self.mark[u as usize] != stamp {
+                    self.mark[u as usize] = stamp;
+                    neighbours.push(u);
+                }
+            }
+        }
         for &u in neighbours.iter() {
             self.push_edge(v, u, heap);
         }

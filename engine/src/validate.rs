@@ -150,26 +150,48 @@ pub(crate) fn fan_count(mesh: &Mesh, topology: &Topology, v: u32) -> usize {
     if faces.len() <= 1 {
         return faces.len();
     }
-    let mut sets = UnionFind::new(faces.len());
-    for (i, f) in faces.iter().enumerate() {
-        let t = mesh.triangles[f.index()];
-        for corner in 0..3 {
-            let e = topology.face_edges[f.index()][corner];
-            let (a, b) = (t[corner], t[(corner + 1) % 3]);
-            if e == NO_EDGE || (a != v && b != v) {
-                continue;
-            }
-            for g in topology.edge_faces.get(e as usize) {
-                if let Some(j) = faces.iter().position(|h| h == g) {
-                    sets.union(i as u32, j as u32);
+    // Label each face with a fan by flood fill across the edges at v; no allocation for the
+    // usual valences.
+    const INLINE: usize = 64;
+    let mut inline = [u32::MAX; INLINE];
+    let mut heap_labels;
+    let labels: &mut [u32] = if faces.len() <= INLINE {
+        &mut inline[..faces.len()]
+    } else {
+        heap_labels = vec![u32::MAX; faces.len()];
+        &mut heap_labels
+    };
+    let mut fans = 0u32;
+    let mut stack: Vec<usize> = Vec::new();
+    for start in 0..faces.len() {
+        if labels[start] != u32::MAX {
+            continue;
+        }
+        labels[start] = fans;
+        stack.clear();
+        stack.push(start);
+        while let Some(i) = stack.pop() {
+            let f = faces[i].index();
+            let t = mesh.triangles[f];
+            for corner in 0..3 {
+                let e = topology.face_edges[f][corner];
+                let (a, b) = (t[corner], t[(corner + 1) % 3]);
+                if e == NO_EDGE || (a != v && b != v) {
+                    continue;
+                }
+                for g in topology.edge_faces.get(e as usize) {
+                    if let Some(j) = faces.iter().position(|h| h == g)
+                        && labels[j] == u32::MAX
+                    {
+                        labels[j] = fans;
+                        stack.push(j);
+                    }
                 }
             }
         }
+        fans += 1;
     }
-    let mut roots: Vec<u32> = (0..faces.len() as u32).map(|i| sets.find(i)).collect();
-    roots.sort_unstable();
-    roots.dedup();
-    roots.len()
+    fans as usize
 }
 
 /// Counts boundary loops: closed walks over boundary half-edges (each in its face's direction).
