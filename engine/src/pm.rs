@@ -76,6 +76,24 @@ impl VertexSplit {
     }
 }
 
+/// A vertex split as a file or a stream carries it: `vs`'s position before the split is not sent,
+/// it is whatever the previous splits left there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StreamedSplit {
+    /// The vertex that splits.
+    pub vs: u32,
+    /// See [`VertexSplit::vl`].
+    pub vl: u32,
+    /// See [`VertexSplit::vr`].
+    pub vr: u32,
+    /// Position of the new vertex.
+    pub new_position: [f32; 3],
+    /// New position of `vs`, or `None` when it does not move.
+    pub split_position: Option<[f32; 3]>,
+    /// See [`VertexSplit::error`].
+    pub error: f32,
+}
+
 /// A base mesh and the vertex splits that refine it back to the original.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ProgressiveMesh {
@@ -163,6 +181,36 @@ impl ProgressiveMesh {
         let mut cursor = LodCursor::new(&pm);
         cursor.seek_level(pm.splits.len())?;
         Ok(pm)
+    }
+
+    /// Assembles a progressive mesh from streamed splits, replaying positions to recover where
+    /// each `vs` sat before its split, then checking it as [`ProgressiveMesh::from_parts`] does.
+    pub fn from_stream(
+        base: Mesh,
+        splits: impl IntoIterator<Item = StreamedSplit>,
+    ) -> Result<ProgressiveMesh, MeshError> {
+        let mut current = base.positions.clone();
+        let mut out = Vec::new();
+        for (j, s) in splits.into_iter().enumerate() {
+            let collapsed_position = *current.get(s.vs as usize).ok_or_else(|| MeshError::Parse {
+                path: "<progressive mesh>".into(),
+                location: format!("split {j}"),
+                reason: format!("vs {} out of range ({} vertices)", s.vs, current.len()),
+            })?;
+            let split_position = s.split_position.unwrap_or(collapsed_position);
+            current[s.vs as usize] = split_position;
+            current.push(s.new_position);
+            out.push(VertexSplit {
+                vs: s.vs,
+                vl: s.vl,
+                vr: s.vr,
+                new_position: s.new_position,
+                split_position,
+                collapsed_position,
+                error: s.error,
+            });
+        }
+        ProgressiveMesh::from_parts(base, out)
     }
 
     /// The coarsest mesh M0.

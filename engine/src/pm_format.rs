@@ -5,7 +5,7 @@ use std::path::Path;
 
 use crate::error::MeshError;
 use crate::mesh::Mesh;
-use crate::pm::{NO_VERTEX, ProgressiveMesh, VertexSplit};
+use crate::pm::{NO_VERTEX, ProgressiveMesh, StreamedSplit};
 
 /// First four bytes of a `.pm` file.
 pub const MAGIC: [u8; 4] = *b"MLPM";
@@ -220,37 +220,13 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<ProgressiveMesh, MeshError> {
         let new_position = r.position()?;
         let split_position = if flags & MOVES_VS != 0 { Some(r.position()?) } else { None };
         let error = r.f32()?;
-        splits.push(VertexSplit {
-            vs: vs as u32,
-            vl,
-            vr,
-            new_position,
-            split_position: split_position.unwrap_or([0.0; 3]),
-            // Filled in below by replaying the splits.
-            collapsed_position: [0.0; 3],
-            error,
-        });
-        // Placeholder marks "does not move"; resolved in the replay.
-        if split_position.is_none() {
-            splits[j].split_position = [f32::NAN; 3];
-        }
+        splits.push(StreamedSplit { vs: vs as u32, vl, vr, new_position, split_position, error });
     }
     if r.offset != r_bytes.len() {
         return Err(r.error(format!("{} unexpected bytes after the last split", r_bytes.len() - r.offset)));
     }
-    // Where vs sat before each split is its position at that level: replay the positions.
-    let mut current = positions.clone();
-    current.resize(vertex_count + split_count, [0.0; 3]);
-    for (j, s) in splits.iter_mut().enumerate() {
-        s.collapsed_position = current[s.vs as usize];
-        if s.split_position[0].is_nan() {
-            s.split_position = s.collapsed_position;
-        }
-        current[s.vs as usize] = s.split_position;
-        current[vertex_count + j] = s.new_position;
-    }
     let base = Mesh { positions, triangles, corners: Default::default() };
-    ProgressiveMesh::from_parts(base, splits).map_err(|e| match e {
+    ProgressiveMesh::from_stream(base, splits).map_err(|e| match e {
         MeshError::Parse { location, reason, .. } => MeshError::Parse { path: path.to_path_buf(), location, reason },
         other => other,
     })

@@ -182,6 +182,17 @@ pub enum StopReason {
     NoLegalCollapse,
 }
 
+impl StopReason {
+    /// The reason as reports and the gRPC contract spell it.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            StopReason::TargetReached => "target_reached",
+            StopReason::MaxErrorReached => "max_error_reached",
+            StopReason::NoLegalCollapse => "no_legal_collapse",
+        }
+    }
+}
+
 /// Figures of one run.
 #[derive(Debug, Clone, Serialize)]
 pub struct SimplifyStats {

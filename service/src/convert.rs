@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use meshlod_engine::io::{MeshFormat, ReadLimits, read_mesh_bytes};
-use meshlod_engine::pm::{NO_VERTEX, ProgressiveMesh, VertexSplit};
+use meshlod_engine::pm::{NO_VERTEX, ProgressiveMesh, StreamedSplit, VertexSplit};
 use meshlod_engine::simplify::{BoundaryMode, Metric, NormalUpdate, Placement, SimplifyOptions};
 use meshlod_engine::{Mesh, MeshError};
 use tonic::Status;
@@ -152,33 +152,21 @@ pub fn progressive_to_proto(pm: &ProgressiveMesh) -> proto::ProgressiveMesh {
 /// it by replaying every split.
 pub fn progressive_from_proto(base: &proto::Mesh, splits: &[proto::VertexSplit]) -> Result<ProgressiveMesh, Status> {
     let base = mesh_from_proto(base, "base", &MeshLimits::default())?;
-    let mut current: Vec<[f32; 3]> = base.positions.clone();
     let mut out = Vec::with_capacity(splits.len());
     for (j, s) in splits.iter().enumerate() {
-        let field = format!("splits[{j}]");
         let triple = |v: &[f32], what: &str| -> Result<[f32; 3], Status> {
-            <[f32; 3]>::try_from(v).map_err(|_| invalid(format!("{field}.{what}"), "needs 3 floats"))
+            <[f32; 3]>::try_from(v).map_err(|_| invalid(format!("splits[{j}].{what}"), "needs 3 floats"))
         };
-        if s.vs as usize >= current.len() {
-            return Err(invalid(format!("{field}.vs"), "out of range"));
-        }
-        let new_position = triple(&s.position, "position")?;
-        let collapsed_position = current[s.vs as usize];
-        let split_position =
-            if s.vs_position.is_empty() { collapsed_position } else { triple(&s.vs_position, "vs_position")? };
-        current[s.vs as usize] = split_position;
-        current.push(new_position);
-        out.push(VertexSplit {
+        out.push(StreamedSplit {
             vs: s.vs,
             vl: s.vl.unwrap_or(NO_VERTEX),
             vr: s.vr.unwrap_or(NO_VERTEX),
-            new_position,
-            split_position,
-            collapsed_position,
+            new_position: triple(&s.position, "position")?,
+            split_position: if s.vs_position.is_empty() { None } else { Some(triple(&s.vs_position, "vs_position")?) },
             error: s.error,
         });
     }
-    ProgressiveMesh::from_parts(base, out).map_err(|e| invalid("splits", e.to_string()))
+    ProgressiveMesh::from_stream(base, out).map_err(|e| invalid("splits", e.to_string()))
 }
 
 /// Engine options from the contract's; `w` is the exponent to use (given or predicted).

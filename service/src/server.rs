@@ -253,7 +253,7 @@ fn run_simplify(
         vertices_in: s.vertices_in as u32,
         vertices_out: s.vertices_out as u32,
         collapses: s.collapses as u32,
-        stop_reason: serde_json_name(&s.stop_reason),
+        stop_reason: s.stop_reason.as_str().to_string(),
         metric: options.metric.name().to_string(),
         w: options.metric.w().unwrap_or(0.0),
         w_source: w_source as i32,
@@ -262,16 +262,6 @@ fn run_simplify(
         seconds: s.seconds,
     };
     Ok((result, stats, hausdorff, mesh))
-}
-
-fn serde_json_name(reason: &meshlod_engine::simplify::StopReason) -> String {
-    use meshlod_engine::simplify::StopReason;
-    match reason {
-        StopReason::TargetReached => "target_reached",
-        StopReason::MaxErrorReached => "max_error_reached",
-        StopReason::NoLegalCollapse => "no_legal_collapse",
-    }
-    .to_string()
 }
 
 #[tonic::async_trait]
