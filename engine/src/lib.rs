@@ -16,6 +16,7 @@ pub mod pm;
 pub mod pm_format;
 pub mod procedural;
 pub mod quadric;
+mod queue;
 pub mod refine;
 pub mod rng;
 pub mod simplify;

@@ -40,8 +40,6 @@
 //!    [`SimplifyOptions::max_normal_change_degrees`] of its old one (no flips);
 //! 5. no surviving face becomes a needle or zero-area triangle ([`MIN_TRIANGLE_QUALITY`]).
 
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering as AtomicOrdering};
 use std::time::Instant;
@@ -53,6 +51,7 @@ use crate::error::MeshError;
 use crate::mesh::{DistanceUnits, Mesh};
 use crate::pm::{CollapseRecord, ProgressiveMesh};
 use crate::quadric::Quadric;
+use crate::queue::{CollapseQueue, QueueEntry, order_key};
 use crate::topology::Topology;
 
 /// The collapse cost.
@@ -296,37 +295,6 @@ pub(crate) struct Candidate {
     pub(crate) position: [f32; 3],
 }
 
-/// A queued candidate. `key` packs the cost and the quadric error as `f32` bit patterns (both are
-/// non-negative, so their bits order like the numbers): one integer comparison per heap step.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct HeapEntry {
-    key: u64,
-    a: u32,
-    b: u32,
-    version_a: u32,
-    version_b: u32,
-}
-
-impl HeapEntry {
-    fn key(cost: f64, error: f64) -> u64 {
-        let bits = |x: f64| (x.max(0.0) as f32).to_bits() as u64;
-        (bits(cost) << 32) | bits(error)
-    }
-}
-
-impl PartialOrd for HeapEntry {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-impl Ord for HeapEntry {
-    /// Reversed so that `BinaryHeap` pops the cheapest; ties broken by error (in the key), then by
-    /// vertex ids so the order (and the progressive mesh) is deterministic.
-    fn cmp(&self, other: &Self) -> Ordering {
-        other.key.cmp(&self.key).then(other.a.cmp(&self.a)).then(other.b.cmp(&self.b))
-    }
-}
-
 #[inline]
 fn to_f64(p: [f32; 3]) -> DVec3 {
     DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
@@ -396,32 +364,27 @@ impl<'o> State<'o> {
             (_, VertexKind::Boundary) => (false, true, false),
             _ => (true, true, true),
         };
-        let q = self.quadrics[a as usize] + self.quadrics[b as usize];
         let (pa, pb) = (self.point(a), self.point(b));
         let mut best: Option<Candidate> = None;
-        let mut consider = |survivor: u32, removed: u32, p: DVec3, cost_of: &dyn Fn(DVec3, f64) -> f64| {
-            let error = q.error(p);
-            let cost = cost_of(p, error);
-            let better = match &best {
-                None => true,
-                Some(c) => (cost, error) < (c.cost, c.error),
-            };
-            if better {
+        // Keeps the candidate with the lower (cost, error); the first one considered wins a tie.
+        let mut consider = |survivor: u32, removed: u32, p: DVec3, cost: f64, error: f64| {
+            if best.as_ref().is_none_or(|c| (cost, error) < (c.cost, c.error)) {
                 best = Some(Candidate { cost, error, survivor, removed, position: to_f32(p) });
             }
         };
+        let q = self.quadrics[a as usize] + self.quadrics[b as usize];
         match self.options.metric {
             Metric::Melax => {
                 if may_keep_b {
-                    let c = self.melax_cost(a, b);
-                    consider(b, a, pb, &|_, _| c);
+                    consider(b, a, pb, self.melax_cost(a, b), q.error(pb));
                 }
                 if may_keep_a {
-                    let c = self.melax_cost(b, a);
-                    consider(a, b, pa, &|_, _| c);
+                    consider(a, b, pa, self.melax_cost(b, a), q.error(pa));
                 }
             }
             Metric::Qem | Metric::Qfvp { .. } => {
+                // The normal term depends on the edge only, not on where the merged vertex goes,
+                // so every placement of this edge is ranked by its quadric error alone.
                 let w = self.options.metric.w().unwrap_or(0.0);
                 let factor = if w == 0.0 {
                     1.0
@@ -436,45 +399,50 @@ impl<'o> State<'o> {
                         _ => x.powf(w),
                     }
                 };
-                let cost_of = |_: DVec3, error: f64| error * factor;
                 // The survivor of a moving collapse: the endpoint that already has more faces,
                 // so fewer faces change corners (smaller vertex split).
-                let mover = if self.vertex_faces[a as usize].len() >= self.vertex_faces[b as usize].len() {
-                    (a, b)
-                } else {
-                    (b, a)
-                };
                 let mover = match (may_keep_a, may_keep_b) {
                     (true, false) => (a, b),
                     (false, true) => (b, a),
-                    _ => mover,
+                    _ if self.vertex_faces[a as usize].len() >= self.vertex_faces[b as usize].len() => (a, b),
+                    _ => (b, a),
                 };
+                let on_boundary = ka == VertexKind::Boundary && kb == VertexKind::Boundary;
+                let optimal = may_move && self.options.placement == Placement::Optimal;
+                if optimal
+                    && !on_boundary
+                    && let Some(p) = q.minimizer()
+                    && (p - (pa + pb) * 0.5).length() <= (pa - pb).length()
+                {
+                    // The minimiser of vᵀQv, when well conditioned and within one edge length of
+                    // the midpoint (a nearly singular system can run far off), has the lowest
+                    // error of all placements: nothing else needs evaluating.
+                    let error = q.error(p);
+                    consider(mover.0, mover.1, p, error * factor, error);
+                    return best;
+                }
                 if may_keep_a {
-                    consider(a, b, pa, &cost_of);
+                    let error = q.error(pa);
+                    consider(a, b, pa, error * factor, error);
                 }
                 if may_keep_b {
-                    consider(b, a, pb, &cost_of);
+                    let error = q.error(pb);
+                    consider(b, a, pb, error * factor, error);
                 }
-                let on_boundary = ka == VertexKind::Boundary && kb == VertexKind::Boundary;
                 if may_move && self.options.placement != Placement::Endpoint {
-                    consider(mover.0, mover.1, (pa + pb) * 0.5, &cost_of);
-                    if self.options.placement == Placement::Optimal && on_boundary {
+                    let mid = (pa + pb) * 0.5;
+                    let e_mid = q.error(mid);
+                    consider(mover.0, mover.1, mid, e_mid * factor, e_mid);
+                    if optimal && on_boundary {
                         // A boundary edge's vertex stays on the edge: the best point of the segment
                         // (the error along it is a parabola through its values at 0, ½ and 1).
-                        let (e0, e1, e2) = (q.error(pa), q.error((pa + pb) * 0.5), q.error(pb));
-                        let curvature = e0 - 2.0 * e1 + e2;
+                        let (e0, e2) = (q.error(pa), q.error(pb));
+                        let curvature = e0 - 2.0 * e_mid + e2;
                         if curvature > 0.0 {
-                            let t = (0.25 * (3.0 * e0 - 4.0 * e1 + e2) / curvature).clamp(0.0, 1.0);
-                            consider(mover.0, mover.1, pa + (pb - pa) * t, &cost_of);
-                        }
-                    } else if self.options.placement == Placement::Optimal
-                        && let Some(p) = q.minimizer()
-                    {
-                        // Never outside a sane neighbourhood: within one edge length of the
-                        // midpoint (the minimiser of a nearly singular system can run far off).
-                        let reach = (pa - pb).length();
-                        if (p - (pa + pb) * 0.5).length() <= reach {
-                            consider(mover.0, mover.1, p, &cost_of);
+                            let t = (0.25 * (3.0 * e0 - 4.0 * e_mid + e2) / curvature).clamp(0.0, 1.0);
+                            let p = pa + (pb - pa) * t;
+                            let error = q.error(p);
+                            consider(mover.0, mover.1, p, error * factor, error);
                         }
                     }
                 }
@@ -696,7 +664,7 @@ impl<'o> State<'o> {
         out.dedup();
     }
 
-    fn push_edges_of(&mut self, v: u32, heap: &mut BinaryHeap<HeapEntry>, neighbours: &mut Vec<u32>) {
+    fn push_edges_of(&mut self, v: u32, heap: &mut CollapseQueue, neighbours: &mut Vec<u32>) {
         // Unique neighbours by mark stamps (no sort: the heap's total order makes push order moot).
         let stamp = self.next_stamp();
         neighbours.clear();
@@ -713,21 +681,21 @@ impl<'o> State<'o> {
         }
     }
 
-    fn push_edge(&self, a: u32, b: u32, heap: &mut BinaryHeap<HeapEntry>) {
+    fn push_edge(&self, a: u32, b: u32, heap: &mut CollapseQueue) {
         if let Some(entry) = self.entry(a, b) {
             heap.push(entry);
         }
     }
 
-    fn entry(&self, a: u32, b: u32) -> Option<HeapEntry> {
+    fn entry(&self, a: u32, b: u32) -> Option<QueueEntry> {
         let (a, b) = (a.min(b), a.max(b));
-        self.evaluate(a, b).map(|c| HeapEntry {
-            key: HeapEntry::key(c.cost, c.error),
-            a,
-            b,
-            version_a: self.version[a as usize],
-            version_b: self.version[b as usize],
-        })
+        self.evaluate(a, b).map(|c| QueueEntry::new(order_key(c.cost, c.error), a, b, self.stamp(a, b)))
+    }
+
+    /// Sum of the version stamps of `a` and `b` (see [`QueueEntry::stamp`]).
+    #[inline]
+    fn stamp(&self, a: u32, b: u32) -> u32 {
+        self.version[a as usize].wrapping_add(self.version[b as usize])
     }
 }
 
@@ -930,7 +898,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     let vertex_count = prepared.vertex_count();
 
     // Heapify once (linear) rather than pushing edge by edge.
-    let mut heap: BinaryHeap<HeapEntry> = topology.edges.iter().filter_map(|&[a, b]| state.entry(a, b)).collect();
+    let mut heap = CollapseQueue::from_vec(topology.edges.iter().filter_map(|&[a, b]| state.entry(a, b)).collect());
 
     let mut faces_alive = faces_in;
     let mut log: Vec<CollapseRecord> = Vec::new();
@@ -966,13 +934,9 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
             }
             continue;
         };
-        let (a, b) = (entry.a, entry.b);
-        if !state.vertex_alive[a as usize]
-            || !state.vertex_alive[b as usize]
-            || state.version[a as usize] != entry.version_a
-            || state.version[b as usize] != entry.version_b
-        {
-            continue; // stale: an endpoint changed since this entry was queued
+        let (a, b) = (entry.a(), entry.b);
+        if state.stamp(a, b) != entry.stamp {
+            continue; // stale: an endpoint changed (or was removed) since this entry was queued
         }
         let Some(candidate) = state.evaluate(a, b) else { continue };
         let merged = state.quadrics[a as usize] + state.quadrics[b as usize];
