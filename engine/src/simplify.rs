@@ -46,13 +46,13 @@ use std::time::Instant;
 
 use glam::DVec3;
 use serde::Serialize;
+use smallvec::SmallVec;
 
 use crate::error::MeshError;
 use crate::mesh::{DistanceUnits, Mesh};
 use crate::pm::{CollapseRecord, ProgressiveMesh};
 use crate::quadric::Quadric;
 use crate::queue::{CollapseQueue, QueueEntry, order_key};
-use crate::topology::Topology;
 
 /// The collapse cost.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -270,7 +270,8 @@ pub(crate) struct State<'o> {
     pub(crate) positions: Vec<[f32; 3]>,
     pub(crate) triangles: Vec<[u32; 3]>,
     pub(crate) face_alive: Vec<bool>,
-    pub(crate) vertex_faces: Vec<Vec<u32>>,
+    /// The live faces around each vertex, with their other two corners.
+    pub(crate) fans: Vec<Fan>,
     pub(crate) vertex_alive: Vec<bool>,
     pub(crate) kind: Vec<VertexKind>,
     pub(crate) version: Vec<u32>,
@@ -284,6 +285,36 @@ pub(crate) struct State<'o> {
     pub(crate) corner_scratch: Vec<(u32, u32)>,
     pub(crate) cos_max_normal_change: f64,
 }
+
+/// One face at a vertex `v`, read from `v` in the face's orientation: (v, next, prev). Fans carry
+/// the corners so that the hot checks (link condition, folds, neighbour rings) never look up the
+/// triangle array.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Corner {
+    pub(crate) face: u32,
+    pub(crate) next: u32,
+    pub(crate) prev: u32,
+}
+
+impl Corner {
+    /// The corner of this face that is neither the fan's vertex nor `x` (one of `next`, `prev`).
+    #[inline]
+    fn other(&self, x: u32) -> u32 {
+        if self.next == x { self.prev } else { self.next }
+    }
+
+    #[inline]
+    fn touches(&self, x: u32) -> bool {
+        self.next == x || self.prev == x
+    }
+}
+
+/// Faces around a vertex kept inline up to this count (valence 6 is typical; merged vertices
+/// reach 8–10 before their neighbours collapse in turn); larger fans spill to the heap.
+const FAN_INLINE: usize = 8;
+
+/// The faces around one vertex.
+pub(crate) type Fan = SmallVec<[Corner; FAN_INLINE]>;
 
 /// A collapse ready to apply: `removed` merges into `survivor`, which moves to `position`.
 #[derive(Debug, Clone, Copy)]
@@ -325,18 +356,22 @@ impl<'o> State<'o> {
 
     /// Mean of the unit normals of the faces around `v` (Gouraud).
     pub(crate) fn fan_normal(&self, v: u32) -> DVec3 {
-        let sum: DVec3 = self.vertex_faces[v as usize].iter().map(|&f| self.face_normal(f)).sum();
+        let p = self.point(v);
+        let sum: DVec3 = self.fans[v as usize]
+            .iter()
+            .map(|c| (self.point(c.next) - p).cross(self.point(c.prev) - p).normalize_or_zero())
+            .sum();
         sum.normalize_or_zero()
     }
 
-    /// Faces on edge (a, b): those around `a` that also contain `b`.
-    fn edge_faces(&self, a: u32, b: u32) -> ([u32; 2], usize) {
-        let mut out = [NONE; 2];
+    /// Faces on edge (a, b), as corners of `a`'s fan, and how many there are.
+    fn edge_corners(&self, a: u32, b: u32) -> ([Corner; 2], usize) {
+        let mut out = [Corner { face: NONE, next: NONE, prev: NONE }; 2];
         let mut n = 0;
-        for &f in &self.vertex_faces[a as usize] {
-            if self.triangles[f as usize].contains(&b) {
+        for c in &self.fans[a as usize] {
+            if c.touches(b) {
                 if n < 2 {
-                    out[n] = f;
+                    out[n] = *c;
                 }
                 n += 1;
             }
@@ -355,7 +390,7 @@ impl<'o> State<'o> {
         // Which endpoints may survive, and whether the survivor may move.
         let (may_keep_a, may_keep_b, may_move) = match (ka, kb) {
             (VertexKind::Boundary, VertexKind::Boundary) => {
-                if lock || self.edge_faces(a, b).1 != 1 {
+                if lock || self.edge_corners(a, b).1 != 1 {
                     return None; // interior edge joining two boundary points, or locked border
                 }
                 (true, true, true)
@@ -404,7 +439,7 @@ impl<'o> State<'o> {
                 let mover = match (may_keep_a, may_keep_b) {
                     (true, false) => (a, b),
                     (false, true) => (b, a),
-                    _ if self.vertex_faces[a as usize].len() >= self.vertex_faces[b as usize].len() => (a, b),
+                    _ if self.fans[a as usize].len() >= self.fans[b as usize].len() => (a, b),
                     _ => (b, a),
                 };
                 let on_boundary = ka == VertexKind::Boundary && kb == VertexKind::Boundary;
@@ -455,12 +490,12 @@ impl<'o> State<'o> {
     /// min over faces n on edge uv of (1 − f·n) / 2.
     fn melax_cost(&self, u: u32, v: u32) -> f64 {
         let length = (self.point(u) - self.point(v)).length();
-        let (shared, count) = self.edge_faces(u, v);
+        let (shared, count) = self.edge_corners(u, v);
         let shared = &shared[..count.min(2)];
         let mut curvature: f64 = 0.0;
-        for &f in &self.vertex_faces[u as usize] {
-            let nf = self.face_normal(f);
-            let min = shared.iter().map(|&s| (1.0 - nf.dot(self.face_normal(s))) / 2.0).fold(1.0f64, f64::min);
+        for c in &self.fans[u as usize] {
+            let nf = self.face_normal(c.face);
+            let min = shared.iter().map(|s| (1.0 - nf.dot(self.face_normal(s.face))) / 2.0).fold(1.0f64, f64::min);
             curvature = curvature.max(min);
         }
         length * curvature
@@ -469,27 +504,21 @@ impl<'o> State<'o> {
     /// Link condition, fan size, normal-change and quality checks for a candidate.
     pub(crate) fn is_legal(&mut self, c: &Candidate) -> bool {
         let (a, b) = (c.survivor, c.removed);
-        let (shared, shared_count) = self.edge_faces(a, b);
+        let (shared, shared_count) = self.edge_corners(a, b);
         if shared_count == 0 || shared_count > 2 {
             return false;
         }
         // Link condition: common neighbours are exactly the opposite vertices of the edge faces.
+        let opposite = [shared[0].other(b), if shared_count == 2 { shared[1].other(b) } else { NONE }];
         let stamp = self.next_stamp();
-        for &f in &self.vertex_faces[a as usize] {
-            for v in self.triangles[f as usize] {
-                self.mark[v as usize] = stamp;
-            }
+        for corner in &self.fans[a as usize] {
+            self.mark[corner.next as usize] = stamp;
+            self.mark[corner.prev as usize] = stamp;
         }
         let mut common = 0;
-        let opposite: Vec<u32> = shared[..shared_count]
-            .iter()
-            .map(|&f| {
-                *self.triangles[f as usize].iter().find(|&&v| v != a && v != b).expect("triangle has three vertices")
-            })
-            .collect();
-        for &f in &self.vertex_faces[b as usize] {
-            for v in self.triangles[f as usize] {
-                if v != a && v != b && self.mark[v as usize] == stamp {
+        for corner in &self.fans[b as usize] {
+            for v in [corner.next, corner.prev] {
+                if v != a && self.mark[v as usize] == stamp {
                     self.mark[v as usize] = stamp.wrapping_sub(1); // count each neighbour once
                     if !opposite.contains(&v) {
                         return false;
@@ -502,7 +531,7 @@ impl<'o> State<'o> {
             return false;
         }
         // The merged vertex keeps enough faces.
-        let remaining = self.vertex_faces[a as usize].len() + self.vertex_faces[b as usize].len() - 2 * shared_count;
+        let remaining = self.fans[a as usize].len() + self.fans[b as usize].len() - 2 * shared_count;
         let interior = self.kind[a as usize] == VertexKind::Interior && self.kind[b as usize] == VertexKind::Interior;
         if remaining < if interior { 3 } else { 1 } {
             return false;
@@ -511,18 +540,18 @@ impl<'o> State<'o> {
         let p = to_f64(c.position);
         let mut fan = std::mem::take(&mut self.fan_scratch);
         fan.clear();
-        for &v in &[a, b] {
-            for &f in &self.vertex_faces[v as usize] {
-                let t = self.triangles[f as usize];
-                if t.contains(&a) && t.contains(&b) {
+        for (v, other) in [(a, b), (b, a)] {
+            let pv = self.point(v);
+            for corner in &self.fans[v as usize] {
+                if corner.touches(other) {
                     continue;
                 }
-                let old: [DVec3; 3] = t.map(|x| self.point(x));
-                let new: [DVec3; 3] = t.map(|x| if x == a || x == b { p } else { self.point(x) });
-                let n_old = (old[1] - old[0]).cross(old[2] - old[0]);
-                let n_new = (new[1] - new[0]).cross(new[2] - new[0]);
+                let (x, y) = (corner.next, corner.prev);
+                let (px, py) = (self.point(x), self.point(y));
+                let n_old = (px - pv).cross(py - pv);
+                let n_new = (px - p).cross(py - p);
                 let (lo, ln) = (n_old.length(), n_new.length());
-                if ln == 0.0 || triangle_quality(new[0], new[1], new[2]) < MIN_TRIANGLE_QUALITY {
+                if ln == 0.0 || triangle_quality(p, px, py) < MIN_TRIANGLE_QUALITY {
                     self.fan_scratch = fan;
                     return false;
                 }
@@ -530,20 +559,21 @@ impl<'o> State<'o> {
                     self.fan_scratch = fan;
                     return false;
                 }
-                let i = t.iter().position(|&x| x == a || x == b).expect("face of a or b");
-                let (x, y) = (t[(i + 1) % 3], t[(i + 2) % 3]);
                 let n_new = n_new / ln;
                 // The face across the far edge (x, y) keeps its normal; the moved face must not
                 // fold onto it.
-                let across = self.vertex_faces[x as usize].iter().find(|&&g| {
-                    let u = self.triangles[g as usize];
-                    u.contains(&y) && !u.contains(&a) && !u.contains(&b)
+                let across = self.fans[x as usize].iter().find(|d| {
+                    d.face != corner.face && d.touches(y) && {
+                        let z = d.other(y);
+                        z != a && z != b
+                    }
                 });
-                if let Some(&g) = across
-                    && self.face_normal(g).dot(n_new) < FOLD_DOT
-                {
-                    self.fan_scratch = fan;
-                    return false;
+                if let Some(d) = across {
+                    let n_across = (self.point(d.next) - px).cross(self.point(d.prev) - px).normalize_or_zero();
+                    if n_across.dot(n_new) < FOLD_DOT {
+                        self.fan_scratch = fan;
+                        return false;
+                    }
                 }
                 fan.push(([x, y], n_new));
             }
@@ -582,7 +612,7 @@ impl<'o> State<'o> {
     /// Applies a legal collapse and returns its log record.
     pub(crate) fn collapse(&mut self, c: &Candidate) -> CollapseRecord {
         let (a, b) = (c.survivor, c.removed);
-        let (shared, shared_count) = self.edge_faces(a, b);
+        let (shared, shared_count) = self.edge_corners(a, b);
         let mut record = CollapseRecord {
             survivor: a,
             removed: b,
@@ -595,12 +625,10 @@ impl<'o> State<'o> {
             collapsed_position: c.position,
             error: 0.0,
         };
-        for &f in &shared[..shared_count] {
-            let t = self.triangles[f as usize];
-            let third = *t.iter().find(|&&v| v != a && v != b).expect("three vertices");
+        for corner in &shared[..shared_count] {
+            let (f, third) = (corner.face, corner.other(b));
             // The face with half-edge a→b is the left face of the split (vs = a, vt = b).
-            let i = t.iter().position(|&v| v == a).expect("contains a");
-            if t[(i + 1) % 3] == b {
+            if corner.next == b {
                 record.left = third;
                 record.left_face = f;
             } else {
@@ -608,21 +636,32 @@ impl<'o> State<'o> {
                 record.right_face = f;
             }
             self.face_alive[f as usize] = false;
-            for v in t {
-                self.vertex_faces[v as usize].retain(|&g| g != f);
+            for v in [a, b, third] {
+                self.fans[v as usize].retain(|d| d.face != f);
             }
         }
-        let count_a = self.vertex_faces[a as usize].len() as f64;
-        let count_b = self.vertex_faces[b as usize].len() as f64;
-        let moved = std::mem::take(&mut self.vertex_faces[b as usize]);
-        for &f in &moved {
-            for corner in self.triangles[f as usize].iter_mut() {
-                if *corner == b {
-                    *corner = a;
+        let count_a = self.fans[a as usize].len() as f64;
+        let count_b = self.fans[b as usize].len() as f64;
+        let moved = std::mem::take(&mut self.fans[b as usize]);
+        for corner in &moved {
+            let f = corner.face;
+            for slot in self.triangles[f as usize].iter_mut() {
+                if *slot == b {
+                    *slot = a;
+                }
+            }
+            for x in [corner.next, corner.prev] {
+                for d in self.fans[x as usize].iter_mut().filter(|d| d.face == f) {
+                    if d.next == b {
+                        d.next = a;
+                    }
+                    if d.prev == b {
+                        d.prev = a;
+                    }
                 }
             }
         }
-        self.vertex_faces[a as usize].extend(moved);
+        self.fans[a as usize].extend(moved);
         self.vertex_alive[b as usize] = false;
         self.positions[a as usize] = c.position;
         let qb = self.quadrics[b as usize];
@@ -653,13 +692,7 @@ impl<'o> State<'o> {
     /// The one-ring of `v`, sorted, into `out`.
     pub(crate) fn neighbours(&self, v: u32, out: &mut Vec<u32>) {
         out.clear();
-        for &f in &self.vertex_faces[v as usize] {
-            for u in self.triangles[f as usize] {
-                if u != v {
-                    out.push(u);
-                }
-            }
-        }
+        out.extend(self.fans[v as usize].iter().flat_map(|c| [c.next, c.prev]));
         out.sort_unstable();
         out.dedup();
     }
@@ -668,9 +701,9 @@ impl<'o> State<'o> {
         // Unique neighbours by mark stamps (no sort: the heap's total order makes push order moot).
         let stamp = self.next_stamp();
         neighbours.clear();
-        for &f in &self.vertex_faces[v as usize] {
-            for u in self.triangles[f as usize] {
-                if u != v && self.mark[u as usize] != stamp {
+        for c in &self.fans[v as usize] {
+            for u in [c.next, c.prev] {
+                if self.mark[u as usize] != stamp {
                     self.mark[u as usize] = stamp;
                     neighbours.push(u);
                 }
@@ -701,19 +734,25 @@ impl<'o> State<'o> {
 
 impl<'o> State<'o> {
     /// Working state for `mesh` (prepared: no repeated-index faces, no unreferenced vertices):
-    /// vertex classes, area-weighted quadrics with boundary constraint planes, Gouraud normals.
-    pub(crate) fn new(mesh: &Mesh, topology: &Topology, options: &'o SimplifyOptions) -> State<'o> {
-        let kind = classify(mesh, topology);
+    /// fans, vertex classes, area-weighted quadrics with boundary constraint planes, Gouraud
+    /// normals. Also returns every undirected edge once, as `[low, high]`, sorted.
+    pub(crate) fn new(mesh: &Mesh, options: &'o SimplifyOptions) -> (State<'o>, Vec<[u32; 2]>) {
         let vertex_count = mesh.vertex_count();
+        let mut fans = vec![Fan::new(); vertex_count];
+        for (f, &[x, y, z]) in mesh.triangles.iter().enumerate() {
+            let face = f as u32;
+            fans[x as usize].push(Corner { face, next: y, prev: z });
+            fans[y as usize].push(Corner { face, next: z, prev: x });
+            fans[z as usize].push(Corner { face, next: x, prev: y });
+        }
+        let Scan { kind, edges, boundary_edges } = scan_fans(&fans);
 
         let mut state = State {
             options,
             positions: mesh.positions.clone(),
             triangles: mesh.triangles.clone(),
             face_alive: vec![true; mesh.face_count()],
-            vertex_faces: (0..vertex_count)
-                .map(|v| topology.vertex_faces.get(v).iter().map(|f| f.0).collect())
-                .collect(),
+            fans,
             vertex_alive: vec![true; vertex_count],
             kind,
             version: vec![0; vertex_count],
@@ -745,13 +784,8 @@ impl<'o> State<'o> {
                 state.quadrics[v as usize] += q;
             }
         }
-        for (e, &[a, b]) in topology.edges.iter().enumerate() {
-            let faces = topology.edge_faces.get(e);
-            if faces.len() != 1 {
-                continue;
-            }
-            let f = faces[0].index();
-            let [p0, p1, p2] = mesh.triangle_points(f);
+        for &(a, b, f) in &boundary_edges {
+            let [p0, p1, p2] = mesh.triangle_points(f as usize);
             let face_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
             let (pa, pb) = (mesh.point(a), mesh.point(b));
             let edge = pb - pa;
@@ -766,7 +800,7 @@ impl<'o> State<'o> {
         for v in 0..vertex_count as u32 {
             state.normals[v as usize] = state.fan_normal(v);
         }
-        state
+        (state, edges)
     }
 
     /// The surviving mesh: live vertices in input order, live faces in input order.
@@ -774,7 +808,7 @@ impl<'o> State<'o> {
         let mut new_index = vec![NONE; self.positions.len()];
         let mut positions = Vec::new();
         for (v, slot) in new_index.iter_mut().enumerate() {
-            if self.vertex_alive[v] && !self.vertex_faces[v].is_empty() {
+            if self.vertex_alive[v] && !self.fans[v].is_empty() {
                 *slot = positions.len() as u32;
                 positions.push(self.positions[v]);
             }
@@ -849,37 +883,93 @@ pub fn prepare(mesh: &Mesh) -> (Mesh, Vec<u32>, usize) {
     (Mesh { positions, triangles, corners: Default::default() }, input_vertex, dropped)
 }
 
-fn classify(mesh: &Mesh, topology: &Topology) -> Vec<VertexKind> {
-    let mut kind = vec![VertexKind::Interior; mesh.vertex_count()];
-    for (e, &[a, b]) in topology.edges.iter().enumerate() {
-        let faces = topology.edge_faces.get(e);
-        let k = match faces.len() {
-            1 => VertexKind::Boundary,
-            2 => {
-                let forward = |f: usize| {
-                    let t = mesh.triangles[f];
-                    (0..3).any(|i| t[i] == a && t[(i + 1) % 3] == b)
-                };
-                if forward(faces[0].index()) == forward(faces[1].index()) {
-                    VertexKind::Frozen
-                } else {
-                    continue;
+/// What one pass over the fans finds.
+struct Scan {
+    kind: Vec<VertexKind>,
+    /// Every undirected edge once, `[low, high]`, sorted.
+    edges: Vec<[u32; 2]>,
+    /// Edges with one face: `(low, high, face)`.
+    boundary_edges: Vec<(u32, u32, u32)>,
+}
+
+/// Classifies every vertex from its fan: an edge with one face makes its ends boundary vertices;
+/// an edge with more than two faces, or two faces that disagree on orientation, and a vertex whose
+/// faces form more than one fan (two surface sheets touching at a point) make it frozen. Each
+/// vertex looks only at its own fan (both ends of an edge see the same faces, so they agree), in
+/// O(valence · log valence).
+fn scan_fans(fans: &[Fan]) -> Scan {
+    let mut kind = vec![VertexKind::Interior; fans.len()];
+    let mut edges = Vec::new();
+    let mut boundary_edges = Vec::new();
+    // (neighbour, outgoing half-edge?, face) for both edges of each corner.
+    let mut ends: Vec<(u32, bool, u32)> = Vec::new();
+    let mut by_next: Vec<(u32, u32)> = Vec::new();
+    let mut by_prev: Vec<(u32, u32)> = Vec::new();
+    for (v, fan) in fans.iter().enumerate() {
+        let v32 = v as u32;
+        ends.clear();
+        ends.extend(fan.iter().flat_map(|c| [(c.next, true, c.face), (c.prev, false, c.face)]));
+        ends.sort_unstable();
+        let mut frozen = false;
+        let mut on_boundary = false;
+        for group in ends.chunk_by(|x, y| x.0 == y.0) {
+            let u = group[0].0;
+            match group {
+                _ if u == v32 => frozen = true,
+                [(_, _, f)] => {
+                    on_boundary = true;
+                    if v32 < u {
+                        boundary_edges.push((v32, u, *f));
+                    }
                 }
+                [(_, first, _), (_, second, _)] if first != second => {}
+                _ => frozen = true,
             }
-            _ => VertexKind::Frozen,
+            if v32 < u {
+                edges.push([v32, u]);
+            }
+        }
+        kind[v] = if frozen || !single_fan(fan, &mut by_next, &mut by_prev) {
+            VertexKind::Frozen
+        } else if on_boundary {
+            VertexKind::Boundary
+        } else {
+            VertexKind::Interior
         };
-        for v in [a, b] {
-            if kind[v as usize] != VertexKind::Frozen {
-                kind[v as usize] = k;
-            }
-        }
     }
-    for (v, k) in kind.iter_mut().enumerate() {
-        if *k != VertexKind::Frozen && crate::validate::fan_count(mesh, topology, v as u32) > 1 {
-            *k = VertexKind::Frozen;
-        }
+    Scan { kind, edges, boundary_edges }
+}
+
+/// Whether the faces around a vertex (all of whose edges are manifold) form one fan: walking from
+/// face to face across shared edges, starting at a face with a free edge if there is one, reaches
+/// every face.
+fn single_fan(fan: &[Corner], by_next: &mut Vec<(u32, u32)>, by_prev: &mut Vec<(u32, u32)>) -> bool {
+    let n = fan.len();
+    if n <= 1 {
+        return true;
     }
-    kind
+    by_next.clear();
+    by_next.extend(fan.iter().enumerate().map(|(i, c)| (c.next, i as u32)));
+    by_next.sort_unstable();
+    by_prev.clear();
+    by_prev.extend(fan.iter().enumerate().map(|(i, c)| (c.prev, i as u32)));
+    by_prev.sort_unstable();
+    let find = |index: &[(u32, u32)], key: u32| {
+        let j = index.partition_point(|e| e.0 < key);
+        (j < index.len() && index[j].0 == key).then(|| index[j].1 as usize)
+    };
+    // A face whose `prev` edge no other face shares starts an open fan.
+    let start = (0..n).find(|&i| find(by_next, fan[i].prev).is_none()).unwrap_or(0);
+    let mut current = start;
+    let mut reached = 1;
+    while let Some(next) = find(by_prev, fan[current].next) {
+        if next == start || reached == n {
+            break;
+        }
+        current = next;
+        reached += 1;
+    }
+    reached == n
 }
 
 /// Simplifies `mesh` by edge collapses until a target is met; see the module documentation.
@@ -893,12 +983,12 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     let faces_in = prepared.face_count();
     let target = target_faces(options, faces_in)?;
     let units = DistanceUnits::new(&prepared.surface_bounds().expect("has faces"));
-    let topology = Topology::new(&prepared);
-    let mut state = State::new(&prepared, &topology, options);
+    let (mut state, edges) = State::new(&prepared, options);
     let vertex_count = prepared.vertex_count();
 
     // Heapify once (linear) rather than pushing edge by edge.
-    let mut heap = CollapseQueue::from_vec(topology.edges.iter().filter_map(|&[a, b]| state.entry(a, b)).collect());
+    let mut heap = CollapseQueue::from_vec(edges.iter().filter_map(|&[a, b]| state.entry(a, b)).collect());
+    drop(edges);
 
     let mut faces_alive = faces_in;
     let mut log: Vec<CollapseRecord> = Vec::new();
@@ -979,4 +1069,119 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
         seconds: started.elapsed().as_secs_f64(),
     };
     Ok(Simplified { mesh: simplified, progressive, stats })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::procedural;
+    use crate::topology::Topology;
+
+    /// The classification from the edge table (sorted half-edges) and the validator's fan count:
+    /// an independent route to what [`scan_fans`] finds from the fans alone.
+    fn reference_kinds(mesh: &Mesh) -> (Vec<VertexKind>, Vec<[u32; 2]>, Vec<(u32, u32)>) {
+        let topology = Topology::new(mesh);
+        let mut kind = vec![VertexKind::Interior; mesh.vertex_count()];
+        let mut boundary = Vec::new();
+        for (e, &[a, b]) in topology.edges.iter().enumerate() {
+            let faces = topology.edge_faces.get(e);
+            let k = match faces.len() {
+                1 => {
+                    boundary.push((a, b));
+                    VertexKind::Boundary
+                }
+                2 => {
+                    let forward = |f: usize| {
+                        let t = mesh.triangles[f];
+                        (0..3).any(|i| t[i] == a && t[(i + 1) % 3] == b)
+                    };
+                    if forward(faces[0].index()) == forward(faces[1].index()) {
+                        VertexKind::Frozen
+                    } else {
+                        continue;
+                    }
+                }
+                _ => VertexKind::Frozen,
+            };
+            for v in [a, b] {
+                if kind[v as usize] != VertexKind::Frozen {
+                    kind[v as usize] = k;
+                }
+            }
+        }
+        for (v, k) in kind.iter_mut().enumerate() {
+            if *k != VertexKind::Frozen && crate::validate::fan_count(mesh, &topology, v as u32) > 1 {
+                *k = VertexKind::Frozen;
+            }
+        }
+        (kind, topology.edges.clone(), boundary)
+    }
+
+    fn assert_scan_matches(name: &str, mesh: &Mesh) {
+        let (mesh, _, _) = prepare(mesh);
+        let options = SimplifyOptions::default();
+        let (state, edges) = State::new(&mesh, &options);
+        let (kind, reference_edges, reference_boundary) = reference_kinds(&mesh);
+        assert_eq!(state.kind, kind, "{name}: vertex classes");
+        assert_eq!(edges, reference_edges, "{name}: edge list");
+        let Scan { boundary_edges, .. } = scan_fans(&state.fans);
+        let boundary: Vec<(u32, u32)> = boundary_edges.iter().map(|&(a, b, _)| (a, b)).collect();
+        assert_eq!(boundary, reference_boundary, "{name}: boundary edges");
+    }
+
+    #[test]
+    fn fan_scan_agrees_with_the_edge_table() {
+        // Closed, open, and the three kinds of trouble: two sheets touching at a vertex, an edge
+        // with three faces, a face turned the wrong way.
+        let square = |positions: Vec<[f32; 3]>, triangles: Vec<[u32; 3]>| Mesh {
+            positions,
+            triangles,
+            corners: Default::default(),
+        };
+        let p = |x: f32, y: f32, z: f32| [x, y, z];
+        let bowtie = square(
+            vec![
+                p(0., 0., 0.),
+                p(1., 0., 0.),
+                p(0., 1., 0.),
+                p(-1., 0., 0.),
+                p(0., -1., 0.),
+                p(1., 1., 0.),
+                p(-1., -1., 0.),
+            ],
+            vec![[0, 1, 5], [0, 5, 2], [0, 3, 6], [0, 6, 4]],
+        );
+        let fin = square(
+            vec![p(0., 0., 0.), p(1., 0., 0.), p(0., 1., 0.), p(0., -1., 0.), p(0., 0., 1.)],
+            vec![[0, 1, 2], [1, 0, 3], [0, 1, 4]],
+        );
+        let flipped =
+            square(vec![p(0., 0., 0.), p(1., 0., 0.), p(0., 1., 0.), p(1., 1., 0.)], vec![[0, 1, 2], [1, 2, 3]]);
+        let mut cases: Vec<(String, Mesh)> = vec![
+            ("icosphere".into(), procedural::icosphere(3)),
+            ("torus".into(), procedural::torus(24, 12, 0.3)),
+            ("terrain".into(), procedural::terrain(20, 3)),
+            ("sharp box".into(), procedural::sharp_box(6)),
+            ("bowtie".into(), bowtie),
+            ("fin".into(), fin),
+            ("flipped".into(), flipped),
+        ];
+        if let Some(dir) = crate::datasets::require_shared_meshes("fan_scan_agrees_with_the_edge_table") {
+            for name in crate::datasets::SHARED_MESHES {
+                let mesh = crate::io::read_mesh(dir.join(format!("{name}.obj"))).expect("shared mesh reads");
+                cases.push((name.to_string(), mesh));
+            }
+        }
+        for (name, mesh) in &cases {
+            assert_scan_matches(name, mesh);
+        }
+        let frozen = |mesh: &Mesh| {
+            let options = SimplifyOptions::default();
+            let (state, _) = State::new(mesh, &options);
+            (0..mesh.vertex_count()).filter(|&v| state.kind[v] == VertexKind::Frozen).collect::<Vec<_>>()
+        };
+        assert_eq!(frozen(&cases[4].1), vec![0], "bowtie centre");
+        assert_eq!(frozen(&cases[5].1), vec![0, 1], "fin edge");
+        assert_eq!(frozen(&cases[6].1), vec![1, 2], "edge between faces of opposite orientation");
+    }
 }

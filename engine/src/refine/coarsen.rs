@@ -21,7 +21,6 @@ use super::energy::vertex_energy;
 use crate::error::MeshError;
 use crate::mesh::Mesh;
 use crate::simplify::{BoundaryMode, Metric, Placement, SimplifyOptions, State, VertexKind};
-use crate::topology::Topology;
 
 /// How often (in queue pops) the cancel flag is read.
 const CANCEL_CHECK_INTERVAL: usize = 256;
@@ -59,8 +58,7 @@ pub(crate) fn coarsen(
         boundary: BoundaryMode::Preserve,
         ..Default::default()
     };
-    let topology = Topology::new(mesh);
-    let mut state = State::new(mesh, &topology, &options);
+    let (mut state, _) = State::new(mesh, &options);
     let vertex_count = mesh.vertex_count();
     let mut scratch = Vec::new();
     let mut mean_length: Vec<f64> =
@@ -149,7 +147,7 @@ pub(crate) fn coarsen(
         // Each face around the touched vertices is re-queued once.
         faces.clear();
         for &v in &touched {
-            faces.extend_from_slice(&state.vertex_faces[v as usize]);
+            faces.extend(state.fans[v as usize].iter().map(|c| c.face));
         }
         faces.sort_unstable();
         faces.dedup();
