@@ -66,6 +66,17 @@ impl CollapseQueue {
         queue
     }
 
+    pub(crate) fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Keeps only the entries `keep` accepts and restores the heap order (linear time).
+    pub(crate) fn retain(&mut self, keep: impl FnMut(&QueueEntry) -> bool) {
+        let mut entries = std::mem::take(&mut self.entries);
+        entries.retain(keep);
+        *self = CollapseQueue::from_vec(entries);
+    }
+
     pub(crate) fn push(&mut self, entry: QueueEntry) {
         self.entries.push(entry);
         let mut i = self.entries.len() - 1;
@@ -150,6 +161,22 @@ mod tests {
         popped.sort_by_key(key);
         reference.sort_by_key(key);
         assert_eq!(popped, reference, "every pushed entry pops exactly once");
+    }
+
+    #[test]
+    fn retain_drops_entries_and_keeps_the_order() {
+        let mut rng = SplitMix64::new(11);
+        let entries: Vec<QueueEntry> =
+            (0..1000u32).map(|i| QueueEntry::new((rng.next_u64() % 100) as u32, i % 37, i, i % 3)).collect();
+        let mut queue = CollapseQueue::from_vec(entries.clone());
+        queue.retain(|e| e.stamp != 0);
+        assert_eq!(queue.len(), entries.iter().filter(|e| e.stamp != 0).count());
+        let mut previous = 0;
+        while let Some(e) = queue.pop() {
+            assert_ne!(e.stamp, 0);
+            assert!(e.rank() >= previous);
+            previous = e.rank();
+        }
     }
 
     #[test]
