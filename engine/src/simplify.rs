@@ -772,6 +772,8 @@ impl<'o> State<'o> {
             }
         }
         // Quadrics: area-weighted face planes, plus boundary planes perpendicular to boundary faces.
+        // Vertex normals (Gouraud: the mean of the unit normals of the faces around) gathered in the
+        // same pass.
         for (f, t) in mesh.triangles.iter().enumerate() {
             let [pa, pb, pc] = mesh.triangle_points(f);
             let n = (pb - pa).cross(pc - pa);
@@ -779,10 +781,15 @@ impl<'o> State<'o> {
             if area == 0.0 {
                 continue;
             }
-            let q = Quadric::from_plane(n.normalize(), pa, area);
+            let unit = n / (2.0 * area);
+            let q = Quadric::from_plane(unit, pa, area);
             for &v in t {
                 state.quadrics[v as usize] += q;
+                state.normals[v as usize] += unit;
             }
+        }
+        for n in state.normals.iter_mut() {
+            *n = n.normalize_or_zero();
         }
         for &(a, b, f) in &boundary_edges {
             let [p0, p1, p2] = mesh.triangle_points(f as usize);
@@ -796,9 +803,6 @@ impl<'o> State<'o> {
             let q = Quadric::constraint(plane_normal, pa, BOUNDARY_WEIGHT * edge.length_squared());
             state.quadrics[a as usize] += q;
             state.quadrics[b as usize] += q;
-        }
-        for v in 0..vertex_count as u32 {
-            state.normals[v as usize] = state.fan_normal(v);
         }
         (state, edges)
     }
@@ -901,28 +905,32 @@ fn scan_fans(fans: &[Fan]) -> Scan {
     let mut kind = vec![VertexKind::Interior; fans.len()];
     let mut edges = Vec::new();
     let mut boundary_edges = Vec::new();
-    // (neighbour, outgoing half-edge?, face) for both edges of each corner.
-    let mut ends: Vec<(u32, bool, u32)> = Vec::new();
+    // Both edges of each corner, packed to sort as one integer: neighbour (high bits), whether the
+    // face runs v → neighbour (bit 32), face (low 32 bits).
+    let mut ends: Vec<u64> = Vec::new();
     let mut by_next: Vec<(u32, u32)> = Vec::new();
     let mut by_prev: Vec<(u32, u32)> = Vec::new();
+    const OUTGOING: u64 = 1 << 32;
     for (v, fan) in fans.iter().enumerate() {
         let v32 = v as u32;
         ends.clear();
-        ends.extend(fan.iter().flat_map(|c| [(c.next, true, c.face), (c.prev, false, c.face)]));
+        ends.extend(fan.iter().flat_map(|c| {
+            [((c.next as u64) << 33) | OUTGOING | c.face as u64, ((c.prev as u64) << 33) | c.face as u64]
+        }));
         ends.sort_unstable();
         let mut frozen = false;
         let mut on_boundary = false;
-        for group in ends.chunk_by(|x, y| x.0 == y.0) {
-            let u = group[0].0;
+        for group in ends.chunk_by(|x, y| x >> 33 == y >> 33) {
+            let u = (group[0] >> 33) as u32;
             match group {
                 _ if u == v32 => frozen = true,
-                [(_, _, f)] => {
+                [end] => {
                     on_boundary = true;
                     if v32 < u {
-                        boundary_edges.push((v32, u, *f));
+                        boundary_edges.push((v32, u, *end as u32));
                     }
                 }
-                [(_, first, _), (_, second, _)] if first != second => {}
+                [x, y] if (x ^ y) & OUTGOING != 0 => {}
                 _ => frozen = true,
             }
             if v32 < u {
@@ -948,21 +956,29 @@ fn single_fan(fan: &[Corner], by_next: &mut Vec<(u32, u32)>, by_prev: &mut Vec<(
     if n <= 1 {
         return true;
     }
-    by_next.clear();
-    by_next.extend(fan.iter().enumerate().map(|(i, c)| (c.next, i as u32)));
-    by_next.sort_unstable();
-    by_prev.clear();
-    by_prev.extend(fan.iter().enumerate().map(|(i, c)| (c.prev, i as u32)));
-    by_prev.sort_unstable();
-    let find = |index: &[(u32, u32)], key: u32| {
+    // The face after face i shares the edge (v, i.next) as its `prev` edge. Ordinary fans are
+    // searched directly; large ones through sorted indices, to stay O(n log n).
+    let small = n <= SMALL_FAN;
+    if !small {
+        by_next.clear();
+        by_next.extend(fan.iter().enumerate().map(|(i, c)| (c.next, i as u32)));
+        by_next.sort_unstable();
+        by_prev.clear();
+        by_prev.extend(fan.iter().enumerate().map(|(i, c)| (c.prev, i as u32)));
+        by_prev.sort_unstable();
+    }
+    let find = |index: &[(u32, u32)], key: u32, field: fn(&Corner) -> u32| {
+        if small {
+            return fan.iter().position(|c| field(c) == key);
+        }
         let j = index.partition_point(|e| e.0 < key);
         (j < index.len() && index[j].0 == key).then(|| index[j].1 as usize)
     };
     // A face whose `prev` edge no other face shares starts an open fan.
-    let start = (0..n).find(|&i| find(by_next, fan[i].prev).is_none()).unwrap_or(0);
+    let start = (0..n).find(|&i| find(by_next, fan[i].prev, |c| c.next).is_none()).unwrap_or(0);
     let mut current = start;
     let mut reached = 1;
-    while let Some(next) = find(by_prev, fan[current].next) {
+    while let Some(next) = find(by_prev, fan[current].next, |c| c.prev) {
         if next == start || reached == n {
             break;
         }
