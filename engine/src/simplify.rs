@@ -336,9 +336,10 @@ fn to_f32(p: DVec3) -> [f32; 3] {
     [p.x as f32, p.y as f32, p.z as f32]
 }
 
-/// `4√3·area / Σ edge²`: 1 for equilateral, 0 for degenerate.
-fn triangle_quality(a: DVec3, b: DVec3, c: DVec3) -> f64 {
-    let area2 = (b - a).cross(c - a).length();
+/// `4√3·area / Σ edge²`: 1 for equilateral, 0 for degenerate; `area2` is twice the area (the
+/// length of the edge cross product, which the caller has at hand).
+#[inline]
+fn triangle_quality(area2: f64, a: DVec3, b: DVec3, c: DVec3) -> f64 {
     let sum = (b - a).length_squared() + (c - b).length_squared() + (a - c).length_squared();
     if sum > 0.0 { 2.0 * 3f64.sqrt() * area2 / sum } else { 0.0 }
 }
@@ -551,7 +552,7 @@ impl<'o> State<'o> {
                 let n_old = (px - pv).cross(py - pv);
                 let n_new = (px - p).cross(py - p);
                 let (lo, ln) = (n_old.length(), n_new.length());
-                if ln == 0.0 || triangle_quality(p, px, py) < MIN_TRIANGLE_QUALITY {
+                if ln == 0.0 || triangle_quality(ln, p, px, py) < MIN_TRIANGLE_QUALITY {
                     self.fan_scratch = fan;
                     return false;
                 }
