@@ -71,6 +71,8 @@ fn main() {
     println!("\nThe paper's figures (paper units): cow 80%: QEM 0.024733, best 0.020492; cow 90%: QEM 0.048358,");
     println!("best 0.032823; stanford-bunny 80%: 0.004618; 90%: 0.006265.\n");
 
+    sensitivity(&meshes);
+
     println!("## Placement — Hausdorff at 90% reduction\n");
     println!(
         "| mesh | QEM paper rule | QEM optimal | QEM endpoint | QFVP w=1 paper | QFVP w=1 optimal | QFVP w=1 endpoint |"
@@ -139,4 +141,53 @@ fn main() {
             );
         }
     }
+}
+
+/// A copy of `mesh` with every non-zero coordinate moved by one unit in the last place, up or down
+/// at random: the same surface to within f32 rounding.
+fn nudged(mesh: &Mesh, seed: u64) -> Mesh {
+    let mut rng = meshlod_engine::rng::SplitMix64::new(seed);
+    let mut out = mesh.clone();
+    for p in out.positions.iter_mut() {
+        for x in p.iter_mut() {
+            let bits = x.to_bits();
+            if bits & 0x7fff_ffff != 0 {
+                *x = f32::from_bits(if rng.next_u64() & 1 == 0 { bits + 1 } else { bits - 1 });
+            }
+        }
+    }
+    out
+}
+
+/// How far the paper-comparison figures move when the input moves by one ulp: the spread is the
+/// resolution at which two simplifiers (or two w) can be told apart by max Hausdorff.
+fn sensitivity(meshes: &[(&str, Mesh)]) {
+    const COPIES: u64 = 8;
+    println!("## Sensitivity — the same figures on one-ulp copies of the input\n");
+    println!("Each input coordinate moved by one unit in the last place (up or down at random), {COPIES} copies;");
+    println!("Hausdorff measured against the unmoved original. min / median / max over the copies.\n");
+    println!("| mesh | reduction | w | unmoved | min | median | max |");
+    println!("|---|---:|---:|---:|---:|---:|---:|");
+    for (name, mesh) in meshes.iter().filter(|(n, _)| *n == "cow" || *n == "stanford-bunny") {
+        for ratio in [0.8, 0.9] {
+            for w in [0.0, 0.5, 1.0] {
+                let options = opts(ratio, Metric::Qfvp { w });
+                let measure = |m: &Mesh| {
+                    let out = simplify(m, &options).expect("simplifies");
+                    hausdorff(mesh, &out.mesh, &HausdorffOptions::default()).expect("measures").hausdorff
+                };
+                let unmoved = measure(mesh);
+                let mut spread: Vec<f64> = (0..COPIES).map(|seed| measure(&nudged(mesh, seed + 1))).collect();
+                spread.sort_by(f64::total_cmp);
+                println!(
+                    "| {name} | {:.0}% | {w} | {unmoved:.6} | {:.6} | {:.6} | {:.6} |",
+                    ratio * 100.0,
+                    spread[0],
+                    (spread[COPIES as usize / 2 - 1] + spread[COPIES as usize / 2]) / 2.0,
+                    spread[COPIES as usize - 1]
+                );
+            }
+        }
+    }
+    println!();
 }
