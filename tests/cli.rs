@@ -187,7 +187,19 @@ fn predictor_drives_w_and_etc() {
     assert_eq!(refined["etc_source"], "predicted");
     assert!(refined["faces_out"].as_u64().unwrap() > refined["faces_in"].as_u64().unwrap());
     fails_with(&["refine", s(&input), "-o", s(&out), "--etc", "auto"], "--faces");
-    fails_with(&["simplify", s(&input), "-o", s(&out), "--w", "sometimes"], "neither a number nor 'auto'");
+    fails_with(&["simplify", s(&input), "-o", s(&out), "--w", "sometimes"], "neither a number, 'auto' nor 'search'");
+    // The measured alternative: every class tried, the lowest Hausdorff kept.
+    let searched =
+        ok_json(&["simplify", s(&input), "-o", s(&out), "--ratio", "0.9", "--w", "search", "--hausdorff", "--json"]);
+    assert_eq!(searched["w_source"], "searched");
+    let candidates = searched["w_candidates"].as_array().expect("candidates listed");
+    let ws: Vec<f64> = candidates.iter().map(|c| c["w"].as_f64().unwrap()).collect();
+    assert_eq!(ws, [0.0, 0.5, 1.0, 1.5, 2.0]);
+    let lowest = candidates.iter().map(|c| c["hausdorff"].as_f64().unwrap()).fold(f64::INFINITY, f64::min);
+    let chosen = candidates.iter().find(|c| c["w"] == searched["w"]).expect("the chosen w is a candidate");
+    assert_eq!(chosen["hausdorff"].as_f64().unwrap(), lowest);
+    assert_eq!(searched["hausdorff"].as_f64().unwrap(), lowest, "the output is the chosen run");
+    fails_with(&["simplify", s(&input), "-o", s(&out), "--w", "search", "--metric", "melax"], "Melax has no w");
     fails_with(&["predict", s(&input), "--ratio", "3"], "ratio");
 }
 

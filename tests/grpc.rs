@@ -201,6 +201,35 @@ async fn every_rpc_over_loopback() {
     assert_eq!(auto.w_source, proto::WSource::Predicted as i32);
     assert_eq!(auto.w, predicted.w);
     assert_eq!(auto.model_version, predicted.model_version);
+
+    // w measured rather than predicted: each class tried, the lowest Hausdorff kept.
+    let searched = client
+        .simplify(proto::SimplifyRequest {
+            input: input(&mesh),
+            options: Some(proto::SimplifyOptions {
+                target_ratio: Some(0.9),
+                w_search: true,
+                compute_hausdorff: true,
+                ..Default::default()
+            }),
+        })
+        .await
+        .unwrap()
+        .into_inner();
+    let stats = searched.stats.unwrap();
+    assert_eq!(stats.w_source, proto::WSource::Searched as i32);
+    assert_eq!(stats.w_candidates.iter().map(|c| c.w).collect::<Vec<_>>(), [0.0, 0.5, 1.0, 1.5, 2.0]);
+    let lowest = stats.w_candidates.iter().map(|c| c.hausdorff).fold(f64::INFINITY, f64::min);
+    assert_eq!(stats.w_candidates.iter().find(|c| c.w == stats.w).unwrap().hausdorff, lowest);
+    assert_eq!(searched.hausdorff.unwrap().hausdorff, lowest);
+    let both = client
+        .simplify(proto::SimplifyRequest {
+            input: input(&mesh),
+            options: Some(proto::SimplifyOptions { w_search: true, w_auto: true, ..Default::default() }),
+        })
+        .await
+        .unwrap_err();
+    assert!(both.code() == Code::InvalidArgument && both.message().starts_with("options.w_search"), "{both:?}");
     let etc_auto = client
         .refine(proto::RefineRequest {
             input: input(&mesh),

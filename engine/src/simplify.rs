@@ -1100,6 +1100,52 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     Ok(Simplified { mesh: simplified, progressive, stats })
 }
 
+/// Outcome of [`simplify_search_w`].
+#[derive(Debug, Clone)]
+pub struct WSearch {
+    /// The simplification with the lowest error; its `stats.seconds` is the wall time of the whole
+    /// search.
+    pub best: Simplified,
+    /// Its w.
+    pub w: f64,
+    /// Every candidate: (w, symmetric Hausdorff distance to the input in paper units), in the
+    /// order given.
+    pub errors: Vec<(f64, f64)>,
+}
+
+/// Simplifies with QFVP once per candidate w (in parallel) and keeps the result closest to the
+/// input by symmetric Hausdorff distance; ties go to the earlier candidate. The exact answer the
+/// predictor only estimates, at the price of one simplification and one measurement per candidate.
+/// `options.metric` must be QFVP or QEM (its w is replaced by each candidate in turn).
+pub fn simplify_search_w(mesh: &Mesh, options: &SimplifyOptions, candidates: &[f64]) -> Result<WSearch, MeshError> {
+    use rayon::prelude::*;
+    if options.metric == Metric::Melax {
+        return Err(MeshError::InvalidParameter {
+            name: "metric",
+            reason: "a w search needs the QFVP metric (Melax has no w)".into(),
+        });
+    }
+    if candidates.is_empty() {
+        return Err(MeshError::InvalidParameter { name: "w", reason: "no candidate w to search".into() });
+    }
+    let started = Instant::now();
+    let runs: Vec<(f64, Simplified, f64)> = candidates
+        .par_iter()
+        .map(|&w| {
+            let run = simplify(mesh, &SimplifyOptions { metric: Metric::Qfvp { w }, ..options.clone() })?;
+            let error = crate::hausdorff::hausdorff(mesh, &run.mesh, &Default::default())?.hausdorff;
+            Ok((w, run, error))
+        })
+        .collect::<Result<_, MeshError>>()?;
+    let errors = runs.iter().map(|(w, _, e)| (*w, *e)).collect();
+    let (w, mut best, _) = runs
+        .into_iter()
+        .reduce(|best, next| if next.2 < best.2 { next } else { best })
+        .expect("at least one candidate");
+    best.stats.seconds = started.elapsed().as_secs_f64();
+    Ok(WSearch { best, w, errors })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -9,7 +9,9 @@ use std::sync::atomic::AtomicBool;
 use meshlod_engine::io::read_mesh;
 use meshlod_engine::pm::ProgressiveMesh;
 use meshlod_engine::pm_format::{decode, encode};
-use meshlod_engine::simplify::{BoundaryMode, Metric, Placement, SimplifyOptions, StopReason, prepare, simplify};
+use meshlod_engine::simplify::{
+    BoundaryMode, Metric, Placement, SimplifyOptions, StopReason, prepare, simplify, simplify_search_w,
+};
 use meshlod_engine::validate::validate;
 use meshlod_engine::{Mesh, MeshError, procedural};
 
@@ -331,4 +333,26 @@ fn max_error_stops_early_and_errors_are_monotone() {
     let pm = out.progressive.unwrap();
     // Split order is refinement order: errors never increase along it.
     assert!(pm.splits().windows(2).all(|w| w[0].error >= w[1].error));
+}
+
+#[test]
+fn w_search_keeps_the_lowest_error_and_matches_a_straight_run() {
+    let mesh = procedural::bumpy_blob(24, 48, 5);
+    let options = SimplifyOptions { target_ratio: Some(0.9), ..Default::default() };
+    let candidates = [0.0, 0.5, 1.0, 1.5, 2.0];
+    let search = simplify_search_w(&mesh, &options, &candidates).expect("searches");
+    assert_eq!(search.errors.iter().map(|e| e.0).collect::<Vec<_>>(), candidates);
+    let lowest = search.errors.iter().map(|e| e.1).fold(f64::INFINITY, f64::min);
+    let (_, chosen_error) = search.errors.iter().find(|e| e.0 == search.w).expect("chosen w is a candidate");
+    assert_eq!(*chosen_error, lowest, "the search keeps the lowest error: {:?}", search.errors);
+    let distinct: std::collections::BTreeSet<u64> = search.errors.iter().map(|e| e.1.to_bits()).collect();
+    assert!(distinct.len() > 1, "w changes the result on a bumpy blob: {:?}", search.errors);
+    let straight = simplify(&mesh, &SimplifyOptions { metric: Metric::Qfvp { w: search.w }, ..options.clone() })
+        .expect("simplifies");
+    assert_eq!(straight.mesh.triangles, search.best.mesh.triangles);
+    assert_eq!(straight.mesh.positions, search.best.mesh.positions);
+
+    let melax = SimplifyOptions { metric: Metric::Melax, ..options.clone() };
+    assert!(matches!(simplify_search_w(&mesh, &melax, &candidates), Err(MeshError::InvalidParameter { .. })));
+    assert!(matches!(simplify_search_w(&mesh, &options, &[]), Err(MeshError::InvalidParameter { .. })));
 }

@@ -5,11 +5,14 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
+use meshlod_engine::features::W_CLASSES;
 use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
 use meshlod_engine::io::{read_mesh, write_mesh};
 use meshlod_engine::pm_format::{encode, read_pm};
 use meshlod_engine::refine::{RefineMode, RefineOptions, refine};
-use meshlod_engine::simplify::{BoundaryMode, Metric, NormalUpdate, Placement, SimplifyOptions, simplify};
+use meshlod_engine::simplify::{
+    BoundaryMode, Metric, NormalUpdate, Placement, SimplifyOptions, simplify, simplify_search_w,
+};
 use meshlod_engine::validate::{clean, validate};
 use meshlod_engine::{Mesh, procedural};
 use serde_json::json;
@@ -153,9 +156,10 @@ pub(crate) struct SimplifyArgs {
     #[arg(long, value_enum, default_value_t = MetricArg::Qfvp)]
     pub(crate) metric: MetricArg,
     /// QFVP exponent w in [0, 2] (0 is plain QEM; the lowest error on most shared meshes, see
-    /// docs/simplify-report.md), or `auto` for the predictor's choice.
+    /// docs/simplify-report.md); `auto` for the predictor's choice; `search` to simplify with each
+    /// of 0, 0.5, 1, 1.5, 2 and keep the result with the lowest Hausdorff distance (five runs).
     #[arg(long, default_value = "0")]
-    pub(crate) w: Auto,
+    pub(crate) w: WArg,
     /// Placement of the merged vertex.
     #[arg(long, value_enum, default_value_t = PlacementArg::Optimal)]
     pub(crate) placement: PlacementArg,
@@ -280,6 +284,27 @@ pub(crate) fn refine_report(args: &RefineArgs) -> Result<serde_json::Value> {
         report["reference_max_diag_pct"] = json!(d.hausdorff_diag_pct);
     }
     Ok(report)
+}
+
+/// `--w`: a number, `auto` (the predictor's choice) or `search` (the best of every class, measured).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum WArg {
+    Value(f64),
+    Auto,
+    Search,
+}
+
+impl std::str::FromStr for WArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.to_ascii_lowercase().as_str() {
+            "auto" => Ok(WArg::Auto),
+            "search" => Ok(WArg::Search),
+            _ => {
+                s.parse::<f64>().map(WArg::Value).map_err(|_| format!("'{s}' is neither a number, 'auto' nor 'search'"))
+            }
+        }
+    }
 }
 
 /// A number, or `auto` for the predictor's choice.
@@ -429,16 +454,25 @@ pub(crate) fn run_simplify(args: SimplifyArgs) -> Result<()> {
 pub(crate) fn simplify_report(args: &SimplifyArgs) -> Result<serde_json::Value> {
     let mesh = load(&args.input)?;
     let (w, model_version) = match args.w {
-        Auto::Value(w) => (w, None),
-        Auto::Auto => {
+        WArg::Value(w) => (w, None),
+        WArg::Search => (0.0, None), // replaced by each candidate in turn
+        WArg::Auto => {
             let target = meshlod_service::predict::target_faces(mesh.face_count(), args.faces, args.ratio)
                 .unwrap_or(mesh.face_count() / 2);
             let advice = meshlod_service::predict::advise(&predictor()?, &mesh, target)?;
             (advice.w.w, Some(advice.model_version))
         }
     };
-    let options = args.options(w);
-    let result = simplify(&mesh, &options)?;
+    let mut options = args.options(w);
+    let (result, candidates) = if args.w == WArg::Search {
+        let search = simplify_search_w(&mesh, &options, &W_CLASSES)?;
+        options.metric = Metric::Qfvp { w: search.w };
+        let candidates: Vec<serde_json::Value> =
+            search.errors.iter().map(|&(w, hausdorff)| json!({ "w": w, "hausdorff": hausdorff })).collect();
+        (search.best, Some(candidates))
+    } else {
+        (simplify(&mesh, &options)?, None)
+    };
     write_mesh(&args.output, &result.mesh)?;
     let stats = &result.stats;
     let mut report = json!({
@@ -448,7 +482,14 @@ pub(crate) fn simplify_report(args: &SimplifyArgs) -> Result<serde_json::Value> 
         "vertices_out": stats.vertices_out,
         "metric": options.metric.name(),
         "w": options.metric.w(),
-        "w_source": if model_version.is_some() { "predicted" } else { "given" },
+        "w_source": if model_version.is_some() {
+            "predicted"
+        } else if candidates.is_some() {
+            "searched"
+        } else {
+            "given"
+        },
+        "w_candidates": candidates,
         "model_version": model_version,
         "placement": options.placement,
         "normals": options.normals,

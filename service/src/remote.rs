@@ -16,7 +16,9 @@ use serde_json::json;
 use tonic::codec::CompressionEncoding;
 use tonic::transport::{Channel, Endpoint};
 
-use crate::commands::{Auto, BoundaryArg, MetricArg, ModeArg, NormalsArg, PlacementArg, RefineArgs, SimplifyArgs};
+use crate::commands::{
+    Auto, BoundaryArg, MetricArg, ModeArg, NormalsArg, PlacementArg, RefineArgs, SimplifyArgs, WArg,
+};
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub(crate) enum LogFormat {
@@ -179,10 +181,11 @@ pub(crate) fn simplify_request(args: &SimplifyArgs) -> Result<proto::SimplifyReq
                 MetricArg::Melax => proto::Metric::Melax,
             } as i32,
             w: match args.w {
-                Auto::Value(w) => Some(w),
-                Auto::Auto => None,
+                WArg::Value(w) => Some(w),
+                WArg::Auto | WArg::Search => None,
             },
-            w_auto: args.w == Auto::Auto,
+            w_auto: args.w == WArg::Auto,
+            w_search: args.w == WArg::Search,
             placement: match args.placement {
                 PlacementArg::Optimal => proto::Placement::Optimal,
                 PlacementArg::Paper => proto::Placement::Paper,

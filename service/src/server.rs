@@ -14,9 +14,10 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 
+use meshlod_engine::features::W_CLASSES;
 use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
 use meshlod_engine::refine::{RefineMode, RefineOptions, refine};
-use meshlod_engine::simplify::simplify;
+use meshlod_engine::simplify::{Metric, simplify, simplify_search_w};
 use tokio::net::TcpListener;
 use tokio::sync::{Semaphore, mpsc};
 use tokio_stream::wrappers::ReceiverStream;
@@ -218,7 +219,12 @@ fn run_simplify(
     let default_options = proto::SimplifyOptions::default();
     let o = request.options.as_ref().unwrap_or(&default_options);
     let mesh = mesh_from_input(request.input.as_ref(), "input", limits)?;
-    let (w, w_source, model_version) = if o.w_auto {
+    if o.w_auto && o.w_search {
+        return Err(Status::invalid_argument("options.w_search: not together with options.w_auto"));
+    }
+    let (w, w_source, model_version) = if o.w_search {
+        (0.0, proto::WSource::Searched, String::new())
+    } else if o.w_auto {
         let predictor = predictor
             .ok_or_else(|| Status::failed_precondition("options.w_auto: this server runs without a predictor model"))?;
         let target =
@@ -232,7 +238,14 @@ fn run_simplify(
     let mut options = convert::simplify_options(o, w)?;
     options.record_progressive |= force_progressive;
     options.cancel = Some(cancel);
-    let result = simplify(&mesh, &options).map_err(|e| engine_status(e, "options"))?;
+    let (result, w_candidates) = if o.w_search {
+        let search = simplify_search_w(&mesh, &options, &W_CLASSES).map_err(|e| engine_status(e, "options"))?;
+        options.metric = Metric::Qfvp { w: search.w };
+        let candidates = search.errors.iter().map(|&(w, hausdorff)| proto::WCandidate { w, hausdorff }).collect();
+        (search.best, candidates)
+    } else {
+        (simplify(&mesh, &options).map_err(|e| engine_status(e, "options"))?, Vec::new())
+    };
     let hausdorff = if o.compute_hausdorff {
         let d =
             hausdorff(&mesh, &result.mesh, &HausdorffOptions::default()).map_err(|e| engine_status(e, "options"))?;
@@ -260,6 +273,7 @@ fn run_simplify(
         model_version,
         max_collapse_error: s.max_collapse_error,
         seconds: s.seconds,
+        w_candidates,
     };
     Ok((result, stats, hausdorff, mesh))
 }
