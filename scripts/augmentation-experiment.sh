@@ -2,7 +2,8 @@
 # The predictor's data experiment (docs/predictor-report.md, "More data"):
 #   bash scripts/augmentation-experiment.sh [MESHES_DIR]
 # Makes a 50%-simplified variant of every mesh and ten procedural meshes, samples them with the
-# engine, and compares leave-one-mesh-out training with and without those rows. ~10 min on 2 cores.
+# engine, and compares leave-one-mesh-out training with and without those rows. ~3 min on 2 cores
+# (plus the first install of the training venv).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 meshes="${1:-${MESHLOD_MESHES:-../shared/meshes}}"
