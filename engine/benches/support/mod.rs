@@ -45,6 +45,27 @@ pub fn peak_during<T>(f: impl FnOnce() -> T) -> (T, usize) {
     (out, PEAK.load(Ordering::Relaxed) - base)
 }
 
+/// Best wall times of `runs` calls of `f` and of `g`, alternating f, g, f, g, … so that a burst of
+/// load on a shared machine falls on both sides alike; the last results.
+#[allow(dead_code)] // not every bench compares with a peer
+pub fn best_of_interleaved<A, B>(
+    runs: usize,
+    mut f: impl FnMut() -> A,
+    mut g: impl FnMut() -> B,
+) -> ((A, f64), (B, f64)) {
+    let (mut best_f, mut best_g) = (f64::INFINITY, f64::INFINITY);
+    let (mut last_f, mut last_g) = (None, None);
+    for _ in 0..runs {
+        let t = Instant::now();
+        last_f = Some(f());
+        best_f = best_f.min(t.elapsed().as_secs_f64());
+        let t = Instant::now();
+        last_g = Some(g());
+        best_g = best_g.min(t.elapsed().as_secs_f64());
+    }
+    ((last_f.expect("runs > 0"), best_f), (last_g.expect("runs > 0"), best_g))
+}
+
 /// Best wall time of `runs` calls, in seconds, and the last result.
 pub fn best_of<T>(runs: usize, mut f: impl FnMut() -> T) -> (T, f64) {
     let mut best = f64::INFINITY;
