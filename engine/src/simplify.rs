@@ -15,9 +15,12 @@
 //! if asked, the progressive mesh built from the log (`crate::pm`).
 //!
 //! ## Ordering and ties
-//! The queue is ordered by `(cost, quadric error)`. For QFVP with w > 0 the cost is exactly zero
-//! where both endpoint normals agree (flat regions): those collapses all cost nothing, and among
-//! them the quadric error decides, so flat regions are simplified in the order plain QEM would use.
+//! For QFVP with w > 0 the cost is exactly zero where both endpoint normals agree (flat regions):
+//! those collapses all cost nothing. The queue puts every zero-cost candidate first, ordered among
+//! themselves by quadric error, so flat regions are simplified in the order plain QEM would use;
+//! positive costs follow in cost order (`crate::queue::order_key`, costs kept as `f32`). Remaining
+//! ties go to the lower first vertex id, then to push order: a run is deterministic, which the
+//! progressive mesh's `at_faces` relies on.
 //!
 //! ## Legality of a collapse (a, b) → a at position p, checked in this order
 //! ```text
