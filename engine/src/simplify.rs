@@ -695,10 +695,29 @@ impl<'o> State<'o> {
 
     /// The one-ring of `v`, sorted, into `out`.
     pub(crate) fn neighbours(&self, v: u32, out: &mut Vec<u32>) {
+        // Around a closed manifold fan every neighbour is the `next` corner of exactly one face, so
+        // those alone are the ring; an open fan adds its last `prev`. Sorting the `next` corners
+        // and adding only the missing `prev` ones sorts half as much as sorting both.
+        let fan = &self.fans[v as usize];
         out.clear();
-        out.extend(self.fans[v as usize].iter().flat_map(|c| [c.next, c.prev]));
+        out.extend(fan.iter().map(|c| c.next));
         out.sort_unstable();
         out.dedup();
+        let nexts = out.len();
+        for c in fan {
+            let missing = if nexts <= 16 {
+                !out[..nexts].contains(&c.prev)
+            } else {
+                out[..nexts].binary_search(&c.prev).is_err()
+            };
+            if missing {
+                out.push(c.prev);
+            }
+        }
+        if out.len() > nexts {
+            out.sort_unstable();
+            out.dedup();
+        }
     }
 
     fn push_edges_of(&mut self, v: u32, heap: &mut CollapseQueue, neighbours: &mut Vec<u32>) {

@@ -85,6 +85,11 @@ pub(crate) fn coarsen(
     let mut ring2 = Vec::new();
     let mut touched: Vec<u32> = Vec::new();
     let mut faces: Vec<u32> = Vec::new();
+    // Stamps for de-duplicating the touched vertices and faces of one step; the queue's order is
+    // total (energy, face id), so the push order of re-queued faces does not matter.
+    let mut vertex_mark = vec![0u32; vertex_count];
+    let mut face_mark = vec![0u32; mesh.face_count()];
+    let mut stamp = 0u32;
     while faces_alive > target_faces {
         pops += 1;
         if pops.is_multiple_of(CANCEL_CHECK_INTERVAL)
@@ -139,21 +144,32 @@ pub(crate) fn coarsen(
             state.neighbours(v, &mut ring2);
             touched.extend_from_slice(&ring2);
         }
-        touched.sort_unstable();
-        touched.dedup();
+        // Each vertex once (marks, not a sort: energies do not depend on the order).
+        stamp += 1;
+        touched.retain(|&v| std::mem::replace(&mut vertex_mark[v as usize], stamp) != stamp);
         for &v in &touched {
             energy[v as usize] = energy_of(&state, &mean_length, v, &mut scratch);
         }
         // Each face around the touched vertices is re-queued once.
         faces.clear();
         for &v in &touched {
-            faces.extend(state.fans[v as usize].iter().map(|c| c.face));
+            for c in &state.fans[v as usize] {
+                if std::mem::replace(&mut face_mark[c.face as usize], stamp) != stamp {
+                    faces.push(c.face);
+                }
+            }
         }
-        faces.sort_unstable();
-        faces.dedup();
         for &g in &faces {
             face_version[g as usize] = face_version[g as usize].wrapping_add(1);
             heap.push((key(face_energy(&state, &energy, g)), Reverse(g), face_version[g as usize]));
+        }
+        // Every step re-queues the ~50 faces of a 2-ring, so most entries go stale; drop them in
+        // one linear sweep once they outnumber the live faces three to one (the queue's order is
+        // total, so what pops next is unchanged).
+        if heap.len() > 4 * faces_alive {
+            heap.retain(|&(_, Reverse(f), version)| {
+                state.face_alive[f as usize] && version == face_version[f as usize]
+            });
         }
     }
     Ok(Coarsened { mesh: state.output_mesh(), collapses, popped })
