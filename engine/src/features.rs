@@ -25,34 +25,31 @@ pub const SHAPE_FEATURE_NAMES: [&str; 8] = [
     "irregular_vertex_share",
 ];
 
-/// Names of the w classifier's inputs ([`w_input`]), in order.
-pub const W_INPUT_NAMES: [&str; 11] = [
-    "log10_faces_in",
-    "log10_faces_target",
-    "ratio",
-    "dihedral_mean",
-    "dihedral_std",
-    "sharp_edge_share",
-    "edge_length_cv",
-    "boundary_edge_share",
-    "normal_variation",
-    "area_cv",
-    "irregular_vertex_share",
-];
+/// Names of the w classifier's inputs ([`w_input`]), in order: counts and ratio, then the shape.
+pub const W_INPUT_NAMES: [&str; 11] = join(["log10_faces_in", "log10_faces_target", "ratio"], SHAPE_FEATURE_NAMES);
 
-/// Names of the ETC regressor's inputs ([`etc_input`]), in order.
-pub const ETC_INPUT_NAMES: [&str; 10] = [
-    "dihedral_mean",
-    "dihedral_std",
-    "sharp_edge_share",
-    "edge_length_cv",
-    "boundary_edge_share",
-    "normal_variation",
-    "area_cv",
-    "irregular_vertex_share",
-    "subdivide",
-    "log2_face_ratio",
-];
+/// Names of the ETC regressor's inputs ([`etc_input`]), in order: the shape, then the mode and size.
+pub const ETC_INPUT_NAMES: [&str; 10] = join(SHAPE_FEATURE_NAMES, ["subdivide", "log2_face_ratio"]);
+
+/// `head` followed by `tail`, so the input-name lists are built from [`SHAPE_FEATURE_NAMES`] and
+/// cannot drift from it.
+const fn join<const A: usize, const B: usize, const N: usize>(
+    head: [&'static str; A],
+    tail: [&'static str; B],
+) -> [&'static str; N] {
+    assert!(A + B == N, "the joined length is the sum of the parts");
+    let mut out = [""; N];
+    let mut i = 0;
+    while i < A {
+        out[i] = head[i];
+        i += 1;
+    }
+    while i < N {
+        out[i] = tail[i - A];
+        i += 1;
+    }
+    out
+}
 
 /// The classes of w the paper's network chooses from.
 pub const W_CLASSES: [f64; 5] = [0.0, 0.5, 1.0, 1.5, 2.0];

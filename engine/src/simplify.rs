@@ -52,6 +52,7 @@ use serde::Serialize;
 use smallvec::SmallVec;
 
 use crate::error::MeshError;
+use crate::hausdorff::{HausdorffOptions, HausdorffReport, hausdorff};
 use crate::mesh::{DistanceUnits, Mesh};
 use crate::pm::{CollapseRecord, ProgressiveMesh};
 use crate::quadric::Quadric;
@@ -460,13 +461,12 @@ impl<'o> State<'o> {
                     consider(mover.0, mover.1, p, error * factor, error);
                     return best;
                 }
+                let (e_a, e_b) = (q.error(pa), q.error(pb));
                 if may_keep_a {
-                    let error = q.error(pa);
-                    consider(a, b, pa, error * factor, error);
+                    consider(a, b, pa, e_a * factor, e_a);
                 }
                 if may_keep_b {
-                    let error = q.error(pb);
-                    consider(b, a, pb, error * factor, error);
+                    consider(b, a, pb, e_b * factor, e_b);
                 }
                 if may_move && self.options.placement != Placement::Endpoint {
                     let mid = (pa + pb) * 0.5;
@@ -475,10 +475,9 @@ impl<'o> State<'o> {
                     if optimal && on_boundary {
                         // A boundary edge's vertex stays on the edge: the best point of the segment
                         // (the error along it is a parabola through its values at 0, ½ and 1).
-                        let (e0, e2) = (q.error(pa), q.error(pb));
-                        let curvature = e0 - 2.0 * e_mid + e2;
+                        let curvature = e_a - 2.0 * e_mid + e_b;
                         if curvature > 0.0 {
-                            let t = (0.25 * (3.0 * e0 - 4.0 * e_mid + e2) / curvature).clamp(0.0, 1.0);
+                            let t = (0.25 * (3.0 * e_a - 4.0 * e_mid + e_b) / curvature).clamp(0.0, 1.0);
                             let p = pa + (pb - pa) * t;
                             let error = q.error(p);
                             consider(mover.0, mover.1, p, error * factor, error);
@@ -1133,6 +1132,9 @@ pub struct WSearch {
     /// Every candidate: (w, symmetric Hausdorff distance to the input in paper units), in the
     /// order given.
     pub errors: Vec<(f64, f64)>,
+    /// The measurement that chose `best` (input vs `best.mesh`, default options): callers that
+    /// report it need not measure again.
+    pub hausdorff: HausdorffReport,
 }
 
 /// Simplifies with QFVP once per candidate w (in parallel) and keeps the result closest to the
@@ -1151,21 +1153,21 @@ pub fn simplify_search_w(mesh: &Mesh, options: &SimplifyOptions, candidates: &[f
         return Err(MeshError::InvalidParameter { name: "w", reason: "no candidate w to search".into() });
     }
     let started = Instant::now();
-    let runs: Vec<(f64, Simplified, f64)> = candidates
+    let runs: Vec<(f64, Simplified, HausdorffReport)> = candidates
         .par_iter()
         .map(|&w| {
             let run = simplify(mesh, &SimplifyOptions { metric: Metric::Qfvp { w }, ..options.clone() })?;
-            let error = crate::hausdorff::hausdorff(mesh, &run.mesh, &Default::default())?.hausdorff;
-            Ok((w, run, error))
+            let measured = hausdorff(mesh, &run.mesh, &HausdorffOptions::default())?;
+            Ok((w, run, measured))
         })
         .collect::<Result<_, MeshError>>()?;
-    let errors = runs.iter().map(|(w, _, e)| (*w, *e)).collect();
-    let (w, mut best, _) = runs
+    let errors = runs.iter().map(|(w, _, d)| (*w, d.hausdorff)).collect();
+    let (w, mut best, hausdorff) = runs
         .into_iter()
-        .reduce(|best, next| if next.2 < best.2 { next } else { best })
+        .reduce(|best, next| if next.2.hausdorff < best.2.hausdorff { next } else { best })
         .expect("at least one candidate");
     best.stats.seconds = started.elapsed().as_secs_f64();
-    Ok(WSearch { best, w, errors })
+    Ok(WSearch { best, w, errors, hausdorff })
 }
 
 #[cfg(test)]

@@ -297,12 +297,13 @@ pub(crate) enum WArg {
 impl std::str::FromStr for WArg {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s.to_ascii_lowercase().as_str() {
-            "auto" => Ok(WArg::Auto),
-            "search" => Ok(WArg::Search),
-            _ => {
-                s.parse::<f64>().map(WArg::Value).map_err(|_| format!("'{s}' is neither a number, 'auto' nor 'search'"))
-            }
+        if s.eq_ignore_ascii_case("search") {
+            return Ok(WArg::Search);
+        }
+        match s.parse::<Auto>() {
+            Ok(Auto::Auto) => Ok(WArg::Auto),
+            Ok(Auto::Value(w)) => Ok(WArg::Value(w)),
+            Err(_) => Err(format!("'{s}' is neither a number, 'auto' nor 'search'")),
         }
     }
 }
@@ -464,14 +465,15 @@ pub(crate) fn simplify_report(args: &SimplifyArgs) -> Result<serde_json::Value> 
         }
     };
     let mut options = args.options(w);
-    let (result, candidates) = if args.w == WArg::Search {
+    // A search has measured its result already; `measured` keeps that for --hausdorff.
+    let (result, candidates, measured) = if args.w == WArg::Search {
         let search = simplify_search_w(&mesh, &options, &W_CLASSES)?;
         options.metric = Metric::Qfvp { w: search.w };
         let candidates: Vec<serde_json::Value> =
             search.errors.iter().map(|&(w, hausdorff)| json!({ "w": w, "hausdorff": hausdorff })).collect();
-        (search.best, Some(candidates))
+        (search.best, Some(candidates), Some(search.hausdorff))
     } else {
-        (simplify(&mesh, &options)?, None)
+        (simplify(&mesh, &options)?, None, None)
     };
     write_mesh(&args.output, &result.mesh)?;
     let stats = &result.stats;
@@ -510,7 +512,10 @@ pub(crate) fn simplify_report(args: &SimplifyArgs) -> Result<serde_json::Value> 
             json!((bytes.len().saturating_sub(base_bytes + 32)) as f64 / pm.levels().max(1) as f64);
     }
     if args.hausdorff {
-        let d = hausdorff(&mesh, &result.mesh, &HausdorffOptions::default())?;
+        let d = match measured {
+            Some(d) => d,
+            None => hausdorff(&mesh, &result.mesh, &HausdorffOptions::default())?,
+        };
         report["hausdorff"] = json!(d.hausdorff);
         report["mean"] = json!(d.mean);
         report["rms"] = json!(d.rms);

@@ -238,17 +238,22 @@ fn run_simplify(
     let mut options = convert::simplify_options(o, w)?;
     options.record_progressive |= force_progressive;
     options.cancel = Some(cancel);
-    let (result, w_candidates) = if o.w_search {
+    // A search has measured its result already; `measured` keeps that for compute_hausdorff.
+    let (result, w_candidates, measured) = if o.w_search {
         let search = simplify_search_w(&mesh, &options, &W_CLASSES).map_err(|e| engine_status(e, "options"))?;
         options.metric = Metric::Qfvp { w: search.w };
         let candidates = search.errors.iter().map(|&(w, hausdorff)| proto::WCandidate { w, hausdorff }).collect();
-        (search.best, candidates)
+        (search.best, candidates, Some(search.hausdorff))
     } else {
-        (simplify(&mesh, &options).map_err(|e| engine_status(e, "options"))?, Vec::new())
+        (simplify(&mesh, &options).map_err(|e| engine_status(e, "options"))?, Vec::new(), None)
     };
     let hausdorff = if o.compute_hausdorff {
-        let d =
-            hausdorff(&mesh, &result.mesh, &HausdorffOptions::default()).map_err(|e| engine_status(e, "options"))?;
+        let d = match measured {
+            Some(d) => d,
+            None => {
+                hausdorff(&mesh, &result.mesh, &HausdorffOptions::default()).map_err(|e| engine_status(e, "options"))?
+            }
+        };
         Some(proto::HausdorffReport {
             hausdorff: d.hausdorff,
             mean: d.mean,

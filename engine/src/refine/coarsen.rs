@@ -84,7 +84,6 @@ pub(crate) fn coarsen(
     let mut ring1 = Vec::new();
     let mut ring2 = Vec::new();
     let mut touched: Vec<u32> = Vec::new();
-    let mut faces: Vec<u32> = Vec::new();
     // Stamps for de-duplicating the touched vertices and faces of one step; the queue's order is
     // total (energy, face id), so the push order of re-queued faces does not matter.
     let mut vertex_mark = vec![0u32; vertex_count];
@@ -151,17 +150,14 @@ pub(crate) fn coarsen(
             energy[v as usize] = energy_of(&state, &mean_length, v, &mut scratch);
         }
         // Each face around the touched vertices is re-queued once.
-        faces.clear();
         for &v in &touched {
             for c in &state.fans[v as usize] {
-                if std::mem::replace(&mut face_mark[c.face as usize], stamp) != stamp {
-                    faces.push(c.face);
+                let g = c.face;
+                if std::mem::replace(&mut face_mark[g as usize], stamp) != stamp {
+                    face_version[g as usize] = face_version[g as usize].wrapping_add(1);
+                    heap.push((key(face_energy(&state, &energy, g)), Reverse(g), face_version[g as usize]));
                 }
             }
-        }
-        for &g in &faces {
-            face_version[g as usize] = face_version[g as usize].wrapping_add(1);
-            heap.push((key(face_energy(&state, &energy, g)), Reverse(g), face_version[g as usize]));
         }
         // Every step re-queues the ~50 faces of a 2-ring, so most entries go stale; drop them in
         // one linear sweep once they outnumber the live faces three to one (the queue's order is
