@@ -52,7 +52,7 @@ impl Quadric {
     }
 
     /// `vᵀ Q v`: the weighted sum of squared plane distances at `v` (never negative).
-    #[inline]
+    #[inline(always)]
     pub fn error(&self, v: DVec3) -> f64 {
         let (x, y, z) = (v.x, v.y, v.z);
         let e = x * (self.a2 * x + 2.0 * (self.ab * y + self.ac * z + self.ad))

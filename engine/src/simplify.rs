@@ -324,10 +324,27 @@ pub(crate) type Fan = SmallVec<[Corner; FAN_INLINE]>;
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Candidate {
     pub(crate) cost: f64,
-    pub(crate) error: f64,
     pub(crate) survivor: u32,
     pub(crate) removed: u32,
     pub(crate) position: [f32; 3],
+}
+
+/// Which endpoint of an edge survives its collapse.
+#[derive(Debug, Clone, Copy)]
+enum Keep {
+    A,
+    B,
+    /// Either may: the one with more faces ([`State::evaluate`]).
+    Larger,
+}
+
+/// A collapse as [`State::choose`] ranks it, before the survivor is fixed.
+#[derive(Debug, Clone, Copy)]
+struct Choice {
+    cost: f64,
+    error: f64,
+    keep: Keep,
+    position: DVec3,
 }
 
 #[inline]
@@ -387,6 +404,23 @@ impl<'o> State<'o> {
     /// The collapse of edge {a, b} the metric prefers, or `None` if the rules forbid every
     /// direction and placement. Geometry-independent rules only; the rest is in `is_legal`.
     pub(crate) fn evaluate(&self, a: u32, b: u32) -> Option<Candidate> {
+        let choice = self.choose(a, b)?;
+        let (survivor, removed) = match choice.keep {
+            Keep::A => (a, b),
+            Keep::B => (b, a),
+            // The survivor of a moving collapse: the endpoint that already has more faces, so
+            // fewer faces change corners (smaller vertex split).
+            Keep::Larger if self.fans[a as usize].len() >= self.fans[b as usize].len() => (a, b),
+            Keep::Larger => (b, a),
+        };
+        Some(Candidate { cost: choice.cost, survivor, removed, position: to_f32(choice.position) })
+    }
+
+    /// The metric's preferred collapse of edge {a, b} as cost, error and position, the survivor
+    /// left open where either endpoint may move: the queue key needs no more, so queueing an edge
+    /// never reads the fans.
+    #[inline]
+    fn choose(&self, a: u32, b: u32) -> Option<Choice> {
         let (ka, kb) = (self.kind[a as usize], self.kind[b as usize]);
         if ka == VertexKind::Frozen || kb == VertexKind::Frozen {
             return None;
@@ -405,21 +439,21 @@ impl<'o> State<'o> {
             _ => (true, true, true),
         };
         let (pa, pb) = (self.point(a), self.point(b));
-        let mut best: Option<Candidate> = None;
-        // Keeps the candidate with the lower (cost, error); the first one considered wins a tie.
-        let mut consider = |survivor: u32, removed: u32, p: DVec3, cost: f64, error: f64| {
+        let mut best: Option<Choice> = None;
+        // Keeps the choice with the lower (cost, error); the first one considered wins a tie.
+        let mut consider = |keep: Keep, position: DVec3, cost: f64, error: f64| {
             if best.as_ref().is_none_or(|c| (cost, error) < (c.cost, c.error)) {
-                best = Some(Candidate { cost, error, survivor, removed, position: to_f32(p) });
+                best = Some(Choice { cost, error, keep, position });
             }
         };
         let q = self.quadrics[a as usize] + self.quadrics[b as usize];
         match self.options.metric {
             Metric::Melax => {
                 if may_keep_b {
-                    consider(b, a, pb, self.melax_cost(a, b), q.error(pb));
+                    consider(Keep::B, pb, self.melax_cost(a, b), q.error(pb));
                 }
                 if may_keep_a {
-                    consider(a, b, pa, self.melax_cost(b, a), q.error(pa));
+                    consider(Keep::A, pa, self.melax_cost(b, a), q.error(pa));
                 }
             }
             Metric::Qem | Metric::Qfvp { .. } => {
@@ -439,39 +473,35 @@ impl<'o> State<'o> {
                         _ => x.powf(w),
                     }
                 };
-                // The survivor of a moving collapse: the endpoint that already has more faces,
-                // so fewer faces change corners (smaller vertex split).
                 let mover = match (may_keep_a, may_keep_b) {
-                    (true, false) => (a, b),
-                    (false, true) => (b, a),
-                    _ if self.fans[a as usize].len() >= self.fans[b as usize].len() => (a, b),
-                    _ => (b, a),
+                    (true, false) => Keep::A,
+                    (false, true) => Keep::B,
+                    _ => Keep::Larger,
                 };
                 let on_boundary = ka == VertexKind::Boundary && kb == VertexKind::Boundary;
                 let optimal = may_move && self.options.placement == Placement::Optimal;
                 if optimal
                     && !on_boundary
                     && let Some(p) = q.minimizer()
-                    && (p - (pa + pb) * 0.5).length() <= (pa - pb).length()
+                    && (p - (pa + pb) * 0.5).length_squared() <= (pa - pb).length_squared()
                 {
                     // The minimiser of vᵀQv, when well conditioned and within one edge length of
                     // the midpoint (a nearly singular system can run far off), has the lowest
                     // error of all placements: nothing else needs evaluating.
                     let error = q.error(p);
-                    consider(mover.0, mover.1, p, error * factor, error);
-                    return best;
+                    return Some(Choice { cost: error * factor, error, keep: mover, position: p });
                 }
                 let (e_a, e_b) = (q.error(pa), q.error(pb));
                 if may_keep_a {
-                    consider(a, b, pa, e_a * factor, e_a);
+                    consider(Keep::A, pa, e_a * factor, e_a);
                 }
                 if may_keep_b {
-                    consider(b, a, pb, e_b * factor, e_b);
+                    consider(Keep::B, pb, e_b * factor, e_b);
                 }
                 if may_move && self.options.placement != Placement::Endpoint {
                     let mid = (pa + pb) * 0.5;
                     let e_mid = q.error(mid);
-                    consider(mover.0, mover.1, mid, e_mid * factor, e_mid);
+                    consider(mover, mid, e_mid * factor, e_mid);
                     if optimal && on_boundary {
                         // A boundary edge's vertex stays on the edge: the best point of the segment
                         // (the error along it is a parabola through its values at 0, ½ and 1).
@@ -480,7 +510,7 @@ impl<'o> State<'o> {
                             let t = (0.25 * (3.0 * e_a - 4.0 * e_mid + e_b) / curvature).clamp(0.0, 1.0);
                             let p = pa + (pb - pa) * t;
                             let error = q.error(p);
-                            consider(mover.0, mover.1, p, error * factor, error);
+                            consider(mover, p, error * factor, error);
                         }
                     }
                 }
@@ -628,7 +658,8 @@ impl<'o> State<'o> {
             collapsed_position: c.position,
             error: 0.0,
         };
-        for corner in &shared[..shared_count] {
+        let mut dead = [NONE; 2];
+        for (slot, corner) in dead.iter_mut().zip(&shared[..shared_count]) {
             let (f, third) = (corner.face, corner.other(b));
             // The face with half-edge a→b is the left face of the split (vs = a, vt = b).
             if corner.next == b {
@@ -639,22 +670,28 @@ impl<'o> State<'o> {
                 record.right_face = f;
             }
             self.face_alive[f as usize] = false;
-            for v in [a, b, third] {
-                self.fans[v as usize].retain(|d| d.face != f);
+            *slot = f;
+            let fan = &mut self.fans[third as usize];
+            if let Some(i) = fan.iter().position(|d| d.face == f) {
+                fan.remove(i);
             }
         }
-        let count_a = self.fans[a as usize].len() as f64;
-        let count_b = self.fans[b as usize].len() as f64;
+        let is_dead = |d: &Corner| d.face == dead[0] || d.face == dead[1];
+        self.fans[a as usize].retain(|d| !is_dead(d));
         let moved = std::mem::take(&mut self.fans[b as usize]);
-        for corner in &moved {
+        let count_a = self.fans[a as usize].len() as f64;
+        let count_b = moved.iter().filter(|d| !is_dead(d)).count();
+        self.fans[a as usize].reserve(count_b);
+        for corner in moved.iter().filter(|d| !is_dead(d)) {
             let f = corner.face;
             for slot in self.triangles[f as usize].iter_mut() {
                 if *slot == b {
                     *slot = a;
                 }
             }
+            // The face's corners at its two other vertices name b: they now name a.
             for x in [corner.next, corner.prev] {
-                for d in self.fans[x as usize].iter_mut().filter(|d| d.face == f) {
+                if let Some(d) = self.fans[x as usize].iter_mut().find(|d| d.face == f) {
                     if d.next == b {
                         d.next = a;
                     }
@@ -663,8 +700,9 @@ impl<'o> State<'o> {
                     }
                 }
             }
+            self.fans[a as usize].push(*corner);
         }
-        self.fans[a as usize].extend(moved);
+        let count_b = count_b as f64;
         self.vertex_alive[b as usize] = false;
         self.positions[a as usize] = c.position;
         let qb = self.quadrics[b as usize];
@@ -744,7 +782,7 @@ impl<'o> State<'o> {
 
     fn entry(&self, a: u32, b: u32) -> Option<QueueEntry> {
         let (a, b) = (a.min(b), a.max(b));
-        self.evaluate(a, b).map(|c| QueueEntry::new(order_key(c.cost, c.error), a, b, self.stamp(a, b)))
+        self.choose(a, b).map(|c| QueueEntry::new(order_key(c.cost, c.error), a, b, self.stamp(a, b)))
     }
 
     /// Sum of the version stamps of `a` and `b` (see [`QueueEntry::stamp`]).
