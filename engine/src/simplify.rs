@@ -602,7 +602,9 @@ impl<'o> State<'o> {
                     }
                 });
                 if let Some(d) = across {
-                    let n_across = (self.point(d.next) - px).cross(self.point(d.prev) - px).normalize_or_zero();
+                    // One corner of the face across is y, already at hand: only its third is read.
+                    let (pn, pp) = if d.next == y { (py, self.point(d.prev)) } else { (self.point(d.next), py) };
+                    let n_across = (pn - px).cross(pp - px).normalize_or_zero();
                     if n_across.dot(n_new) < FOLD_DOT {
                         self.fan_scratch = fan;
                         return false;
@@ -980,7 +982,7 @@ fn scan_fans(fans: &[Fan]) -> Scan {
         ends.extend(fan.iter().flat_map(|c| {
             [((c.next as u64) << 33) | OUTGOING | c.face as u64, ((c.prev as u64) << 33) | c.face as u64]
         }));
-        ends.sort_unstable();
+        sort_ends(&mut ends);
         let mut frozen = false;
         let mut on_boundary = false;
         for group in ends.chunk_by(|x, y| x >> 33 == y >> 33) {
@@ -1009,6 +1011,25 @@ fn scan_fans(fans: &[Fan]) -> Scan {
         };
     }
     Scan { kind, edges, boundary_edges }
+}
+
+/// Sorts the corner ends of one vertex (twice its valence, a dozen as a rule) in place: short runs
+/// by insertion, which does less work there than the general sort; long ones (a hub vertex) by the
+/// general sort, so that the time stays O(n log n).
+fn sort_ends(values: &mut [u64]) {
+    if values.len() > 2 * SMALL_FAN {
+        values.sort_unstable();
+        return;
+    }
+    for i in 1..values.len() {
+        let x = values[i];
+        let mut j = i;
+        while j > 0 && values[j - 1] > x {
+            values[j] = values[j - 1];
+            j -= 1;
+        }
+        values[j] = x;
+    }
 }
 
 /// Whether the faces around a vertex (all of whose edges are manifold) form one fan: walking from
@@ -1266,6 +1287,18 @@ mod tests {
         let Scan { boundary_edges, .. } = scan_fans(&state.fans);
         let boundary: Vec<(u32, u32)> = boundary_edges.iter().map(|&(a, b, _)| (a, b)).collect();
         assert_eq!(boundary, reference_boundary, "{name}: boundary edges");
+    }
+
+    #[test]
+    fn corner_ends_sort_short_and_long_runs() {
+        let mut rng = crate::rng::SplitMix64::new(3);
+        for len in [0, 1, 2, 5, 12, 2 * SMALL_FAN, 2 * SMALL_FAN + 1, 500] {
+            let mut values: Vec<u64> = (0..len).map(|_| rng.next_u64() % 64).collect();
+            let mut expected = values.clone();
+            expected.sort_unstable();
+            sort_ends(&mut values);
+            assert_eq!(values, expected, "{len} values");
+        }
     }
 
     #[test]
