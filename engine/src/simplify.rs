@@ -19,8 +19,10 @@
 //! those collapses all cost nothing. The queue puts every zero-cost candidate first, ordered among
 //! themselves by quadric error, so flat regions are simplified in the order plain QEM would use;
 //! positive costs follow in cost order (`crate::queue::order_key`, costs kept as `f32`). Remaining
-//! ties go to the lower first vertex id, then to push order: a run is deterministic, which the
-//! progressive mesh's `at_faces` relies on.
+//! ties go to the lower first vertex id, then to the heap's layout, which the sequence of pushes,
+//! pops and sweeps fixes (not push order: a heap is not stable): a run is deterministic, which the
+//! progressive mesh's `at_faces` relies on, but a change to the queue's sweep rule or its pop
+//! moves ties among equal keys (fandisk's planar regions, where many keys are equal, show it).
 //!
 //! ## Legality of a collapse (a, b) → a at position p, checked in this order
 //! ```text
