@@ -684,7 +684,9 @@ impl<'o> State<'o> {
         self.fans[a as usize].retain(|d| !is_dead(d));
         let moved = std::mem::take(&mut self.fans[b as usize]);
         let count_a = self.fans[a as usize].len() as f64;
-        let count_b = moved.iter().filter(|d| !is_dead(d)).count();
+        // b's fan holds each face at b once, the shared faces among them.
+        let count_b = moved.len() - shared_count;
+        debug_assert_eq!(count_b, moved.iter().filter(|d| !is_dead(d)).count());
         self.fans[a as usize].reserve(count_b);
         for corner in moved.iter().filter(|d| !is_dead(d)) {
             let f = corner.face;
@@ -706,14 +708,13 @@ impl<'o> State<'o> {
             }
             self.fans[a as usize].push(*corner);
         }
-        let count_b = count_b as f64;
         self.vertex_alive[b as usize] = false;
         self.positions[a as usize] = c.position;
         let qb = self.quadrics[b as usize];
         self.quadrics[a as usize] += qb;
         self.normals[a as usize] = match self.options.normals {
             NormalUpdate::Linear => {
-                let n = self.normals[a as usize] * count_a + self.normals[b as usize] * count_b;
+                let n = self.normals[a as usize] * count_a + self.normals[b as usize] * count_b as f64;
                 let n = n.normalize_or_zero();
                 if n == DVec3::ZERO { self.fan_normal(a) } else { n }
             }
