@@ -110,7 +110,7 @@ impl ProgressiveMesh {
     pub(crate) fn from_log(
         prepared: &Mesh,
         input_vertex: &[u32],
-        final_positions: &[[f32; 3]],
+        final_position: impl Fn(u32) -> [f32; 3],
         final_triangles: &[[u32; 3]],
         face_alive: &[bool],
         log: &[CollapseRecord],
@@ -134,8 +134,7 @@ impl ProgressiveMesh {
             order.push(r.removed);
         }
         let map = |v: u32| if v == NO_VERTEX { NO_VERTEX } else { vertex_map[v as usize] };
-        let base_positions: Vec<[f32; 3]> =
-            order[..base_vertices].iter().map(|&v| final_positions[v as usize]).collect();
+        let base_positions: Vec<[f32; 3]> = order[..base_vertices].iter().map(|&v| final_position(v)).collect();
         let base_triangles: Vec<[u32; 3]> = (0..final_triangles.len())
             .filter(|&f| face_alive[f])
             .map(|f| final_triangles[f].map(|v| vertex_map[v as usize]))

@@ -106,7 +106,7 @@ pub(crate) fn coarsen(
         }
         popped.push(e);
         let t = state.triangles[f as usize];
-        let kinds = t.map(|v| state.kind[v as usize]);
+        let kinds = t.map(|v| state.vertices[v as usize].kind);
         if kinds.contains(&VertexKind::Frozen) || kinds.iter().filter(|&&k| k == VertexKind::Boundary).count() >= 2 {
             continue;
         }
