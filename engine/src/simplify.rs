@@ -1039,15 +1039,19 @@ fn scan_small_fan(v: u32, fan: &[Corner], scan: &mut Scan) -> VertexKind {
     // vectors): faces running v → x and x → v, where x is i's `next`; v → y and y → v, where y is
     // its `prev`; and the face after i around v (whose `prev` is x), meaningful when there is one.
     let (mut out_x, mut in_x, mut out_y, mut in_y, mut after) = ([0u32; N], [0u32; N], [0u32; N], [0u32; N], [0u32; N]);
+    // Only the groups of four lanes that hold faces (two for the usual valence).
+    let groups = n.div_ceil(4).min(N / 4);
     for k in 0..n {
         let (x, y) = (next[k], prev[k]);
-        for i in 0..N {
-            let follows = ((next[i] == y) as u32).wrapping_neg();
-            out_x[i] += (next[i] == x) as u32;
-            in_x[i] += follows & 1;
-            after[i] |= follows & k as u32;
-            out_y[i] += (prev[i] == x) as u32;
-            in_y[i] += (prev[i] == y) as u32;
+        for group in 0..groups {
+            for i in 4 * group..4 * group + 4 {
+                let follows = ((next[i] == y) as u32).wrapping_neg();
+                out_x[i] += (next[i] == x) as u32;
+                in_x[i] += follows & 1;
+                after[i] |= follows & k as u32;
+                out_y[i] += (prev[i] == x) as u32;
+                in_y[i] += (prev[i] == y) as u32;
+            }
         }
     }
     for i in 0..n {
