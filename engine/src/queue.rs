@@ -70,10 +70,19 @@ impl CollapseQueue {
         self.entries.len()
     }
 
-    /// Keeps only the entries `keep` accepts and restores the heap order (linear time).
-    pub(crate) fn retain(&mut self, keep: impl FnMut(&QueueEntry) -> bool) {
+    /// Keeps only the entries `keep` accepts, in their order, and restores the heap order (linear
+    /// time). Every entry is copied and the write position advanced by the verdict, without a
+    /// branch on it: a quarter to a third of the entries are dropped, in no pattern a predictor
+    /// could learn.
+    pub(crate) fn retain(&mut self, mut keep: impl FnMut(&QueueEntry) -> bool) {
         let mut entries = std::mem::take(&mut self.entries);
-        entries.retain(keep);
+        let mut kept = 0;
+        for read in 0..entries.len() {
+            let entry = entries[read];
+            entries[kept] = entry;
+            kept += keep(&entry) as usize;
+        }
+        entries.truncate(kept);
         *self = CollapseQueue::from_vec(entries);
     }
 
