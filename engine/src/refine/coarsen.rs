@@ -35,13 +35,59 @@ pub(crate) struct Coarsened {
     pub popped: Vec<f64>,
 }
 
-fn mean_edge_length(state: &State, v: u32, scratch: &mut Vec<u32>) -> f64 {
-    state.neighbours(v, scratch);
-    if scratch.is_empty() {
+/// Mean length of the edges from `v` to `ring` (its sorted one-ring).
+fn mean_edge_length(state: &State, v: u32, ring: &[u32]) -> f64 {
+    if ring.is_empty() {
         return 0.0;
     }
     let p = state.point(v);
-    scratch.iter().map(|&u| (state.point(u) - p).length()).sum::<f64>() / scratch.len() as f64
+    ring.iter().map(|&u| (state.point(u) - p).length()).sum::<f64>() / ring.len() as f64
+}
+
+/// The sorted one-rings read during one step, each computed once: a step reads the rings of the
+/// survivor and its neighbours three times each (mean lengths, the two-ring, energies), and the
+/// rings do not change within a step.
+struct RingCache {
+    rings: Vec<u32>,
+    /// Where each vertex's ring lies in `rings`, valid when its stamp is the current one.
+    span: Vec<(u32, u32)>,
+    stamp_of: Vec<u32>,
+    stamp: u32,
+    scratch: Vec<u32>,
+}
+
+impl RingCache {
+    fn new(vertex_count: usize) -> RingCache {
+        RingCache {
+            rings: Vec::new(),
+            span: vec![(0, 0); vertex_count],
+            stamp_of: vec![0; vertex_count],
+            stamp: 0,
+            scratch: Vec::new(),
+        }
+    }
+
+    /// Forgets every ring (the mesh changed).
+    fn clear(&mut self) {
+        self.rings.clear();
+        self.stamp += 1;
+        if self.stamp == u32::MAX {
+            self.stamp_of.iter_mut().for_each(|s| *s = 0);
+            self.stamp = 1;
+        }
+    }
+
+    /// The range of `v`'s ring in `self.rings`.
+    fn ring(&mut self, state: &State, v: u32) -> std::ops::Range<usize> {
+        if self.stamp_of[v as usize] != self.stamp {
+            state.neighbours(v, &mut self.scratch);
+            self.span[v as usize] = (self.rings.len() as u32, self.scratch.len() as u32);
+            self.rings.extend_from_slice(&self.scratch);
+            self.stamp_of[v as usize] = self.stamp;
+        }
+        let (start, len) = self.span[v as usize];
+        start as usize..(start + len) as usize
+    }
 }
 
 /// Collapses faces in increasing energy while their energy is below `threshold` (absolute) and
@@ -61,14 +107,22 @@ pub(crate) fn coarsen(
     let (mut state, _) = State::new(mesh, &options);
     let vertex_count = mesh.vertex_count();
     let mut scratch = Vec::new();
-    let mut mean_length: Vec<f64> =
-        (0..vertex_count as u32).map(|v| mean_edge_length(&state, v, &mut scratch)).collect();
-    let energy_of = |state: &State, mean_length: &[f64], v: u32, scratch: &mut Vec<u32>| {
-        state.neighbours(v, scratch);
-        vertex_energy(state.point(v), scratch.iter().map(|&u| (state.point(u), mean_length[u as usize])))
+    let mut mean_length: Vec<f64> = (0..vertex_count as u32)
+        .map(|v| {
+            state.neighbours(v, &mut scratch);
+            mean_edge_length(&state, v, &scratch)
+        })
+        .collect();
+    let energy_of = |state: &State, mean_length: &[f64], v: u32, ring: &[u32]| {
+        vertex_energy(state.point(v), ring.iter().map(|&u| (state.point(u), mean_length[u as usize])))
     };
-    let mut energy: Vec<f64> =
-        (0..vertex_count as u32).map(|v| energy_of(&state, &mean_length, v, &mut scratch)).collect();
+    let mut energy: Vec<f64> = (0..vertex_count as u32)
+        .map(|v| {
+            state.neighbours(v, &mut scratch);
+            energy_of(&state, &mean_length, v, &scratch)
+        })
+        .collect();
+    let mut rings = RingCache::new(vertex_count);
     let face_energy = |state: &State, energy: &[f64], f: u32| -> f64 {
         state.triangles[f as usize].iter().map(|&v| energy[v as usize]).sum()
     };
@@ -81,8 +135,6 @@ pub(crate) fn coarsen(
     let mut collapses = 0;
     let mut popped = Vec::new();
     let mut pops = 0usize;
-    let mut ring1 = Vec::new();
-    let mut ring2 = Vec::new();
     let mut touched: Vec<u32> = Vec::new();
     // Stamps for de-duplicating the touched vertices and faces of one step; the queue's order is
     // total (energy, face id), so the push order of re-queued faces does not matter.
@@ -132,22 +184,26 @@ pub(crate) fn coarsen(
             survivor = second.survivor;
         }
         // Local energy update: mean lengths of the survivor and its ring, energies of the 2-ring.
-        state.neighbours(survivor, &mut ring1);
+        rings.clear();
+        let ring1 = rings.ring(&state, survivor);
         touched.clear();
         touched.push(survivor);
-        touched.extend_from_slice(&ring1);
+        touched.extend_from_slice(&rings.rings[ring1.clone()]);
         for &v in &touched {
-            mean_length[v as usize] = mean_edge_length(&state, v, &mut scratch);
+            let ring = rings.ring(&state, v);
+            mean_length[v as usize] = mean_edge_length(&state, v, &rings.rings[ring]);
         }
-        for &v in &ring1 {
-            state.neighbours(v, &mut ring2);
-            touched.extend_from_slice(&ring2);
+        for i in ring1 {
+            let v = rings.rings[i];
+            let ring2 = rings.ring(&state, v);
+            touched.extend_from_slice(&rings.rings[ring2]);
         }
         // Each vertex once (marks, not a sort: energies do not depend on the order).
         stamp += 1;
         touched.retain(|&v| std::mem::replace(&mut vertex_mark[v as usize], stamp) != stamp);
         for &v in &touched {
-            energy[v as usize] = energy_of(&state, &mean_length, v, &mut scratch);
+            let ring = rings.ring(&state, v);
+            energy[v as usize] = energy_of(&state, &mean_length, v, &rings.rings[ring]);
         }
         // Each face around the touched vertices is re-queued once.
         for &v in &touched {
