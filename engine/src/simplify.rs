@@ -278,7 +278,11 @@ pub(crate) struct State<'o> {
     pub(crate) options: &'o SimplifyOptions,
     /// Quadric, normal, position and class of each vertex (see [`VertexData`]).
     pub(crate) vertices: Vec<VertexData>,
+    /// Each face's corners, kept current by every collapse while `track_triangles` is set; the
+    /// simplifier's own loop clears it (the fans carry what the loop reads) and rebuilds the
+    /// array once at the end from the log ([`State::rebuild_triangles`]).
     pub(crate) triangles: Vec<[u32; 3]>,
+    pub(crate) track_triangles: bool,
     pub(crate) face_alive: Vec<bool>,
     /// The live faces around each vertex, with their other two corners.
     pub(crate) fans: Vec<Fan>,
@@ -290,6 +294,9 @@ pub(crate) struct State<'o> {
     /// Scratch for the fold check: the two other corners and the new unit normal of each face.
     pub(crate) fan_scratch: Vec<([u32; 2], DVec3)>,
     pub(crate) corner_scratch: Vec<(u32, u32)>,
+    /// The collapse (survivor, removed, position bits) that `is_legal` last accepted, whose new
+    /// face normals `fan_scratch` still holds.
+    pub(crate) checked: Option<(u32, u32, [u32; 3])>,
     pub(crate) cos_max_normal_change: f64,
 }
 
@@ -307,9 +314,78 @@ pub(crate) struct VertexData {
     pub(crate) normal: DVec3,
     pub(crate) position: [f32; 3],
     pub(crate) kind: VertexKind,
+    /// A lower bound on the cosine between `normal` and the unit normal of every live face around
+    /// the vertex ([`NormalCone`]), in the block's last spare bytes.
+    pub(crate) cone: NormalCone,
 }
 
 const _: () = assert!(std::mem::size_of::<VertexData>() == 128);
+
+/// Faces whose quality (`4√3·area / Σ edge²`) is below this at the start make their corners'
+/// [`NormalCone`]s unusable: the normal of such a face depends on which corner its cross product
+/// starts from by more than the cone test's margin. Every face a collapse creates is far above it
+/// ([`MIN_TRIANGLE_QUALITY`]).
+const CONE_MIN_QUALITY: f64 = 1e-4;
+
+/// Margin (in cosine) that the cone test keeps from the fold threshold: far more than the rounding
+/// of the unit normals it compares, so a skipped check is one that could not have failed.
+const CONE_MARGIN: f64 = 1e-6;
+
+/// `sin` of the fold angle, `√(1 − FOLD_DOT²)`.
+const FOLD_SIN: f64 = 0.435_889_894_354_067_4;
+
+/// The cosine of the widest angle between a vertex's normal and the normals of the faces around it,
+/// rounded down to a multiple of 1/32767 (so it never claims a narrower cone than there is).
+///
+/// It lets the fold check skip the face across a moved face's far edge (x, y) when no face at x can
+/// be folded onto: if the moved face's new normal is within θ of x's normal and every face at x is
+/// within γ of it, the two normals are at most θ + γ apart, and below the fold angle the check
+/// passes. Reading the face across costs a search of x's fan and the position of a vertex of the
+/// 2-ring, the largest source of cache misses of the whole loop; the cone sits in the block of x,
+/// which the check has just read for x's position. Kept exact by widening the cones of every
+/// vertex of each face a collapse moves ([`State::collapse`]), and recomputed for the survivor,
+/// whose normal changes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct NormalCone(i16);
+
+impl NormalCone {
+    /// No face yet: every normal is within 0° (the first face widens it).
+    const EMPTY: NormalCone = NormalCone(i16::MAX);
+    /// Never usable: below −FOLD_DOT's reach, so the test never passes.
+    const NEVER: NormalCone = NormalCone(i16::MIN);
+
+    fn at_least(cos: f64) -> NormalCone {
+        // One step below the truncated value, so never above `cos` (a float-to-int cast
+        // truncates toward zero and saturates; `floor` would be a library call). `max` maps NaN
+        // to the lowest value, which no test passes.
+        NormalCone((cos * 32767.0 - 1.0).max(i16::MIN as f64) as i16)
+    }
+
+    fn cos(self) -> f64 {
+        self.0 as f64 / 32767.0
+    }
+
+    /// Widens the cone around `axis` to take in the unit normal `n`.
+    fn widen(&mut self, axis: DVec3, n: DVec3) {
+        *self = NormalCone(self.0.min(NormalCone::at_least(axis.dot(n)).0));
+    }
+
+    /// Whether no face of this cone (around the unit `axis`) can be folded onto a face with unit
+    /// normal `n`: the angle between `n` and the axis plus the cone's half-angle stays below the
+    /// fold angle, with a margin.
+    #[inline]
+    fn excludes_fold(self, axis: DVec3, n: DVec3) -> bool {
+        let d = axis.dot(n);
+        d >= FOLD_DOT + CONE_MARGIN
+            && self.cos() >= FOLD_DOT * d + FOLD_SIN * (1.0 - d * d).max(0.0).sqrt() + CONE_MARGIN
+    }
+}
+
+impl Default for NormalCone {
+    fn default() -> Self {
+        NormalCone::EMPTY
+    }
+}
 
 /// One face at a vertex `v`, read from `v` in the face's orientation: (v, next, prev). Fans carry
 /// the corners so that the hot checks (link condition, folds, neighbour rings) never look up the
@@ -392,6 +468,7 @@ impl<'o> State<'o> {
     }
 
     pub(crate) fn face_normal(&self, f: u32) -> DVec3 {
+        debug_assert!(self.track_triangles, "the triangle array is not being kept current");
         let [a, b, c] = self.triangles[f as usize];
         let (pa, pb, pc) = (self.point(a), self.point(b), self.point(c));
         (pb - pa).cross(pc - pa).normalize_or_zero()
@@ -558,7 +635,9 @@ impl<'o> State<'o> {
 
     /// Link condition, fan size, normal-change and quality checks for a candidate.
     pub(crate) fn is_legal(&mut self, c: &Candidate) -> bool {
+        self.checked = None;
         let (a, b) = (c.survivor, c.removed);
+        self.touch_ring(a, b);
         let (shared, shared_count) = self.edge_corners(a, b);
         if shared_count == 0 || shared_count > 2 {
             return false;
@@ -617,21 +696,13 @@ impl<'o> State<'o> {
                 }
                 let n_new = n_new / ln;
                 // The face across the far edge (x, y) keeps its normal; the moved face must not
-                // fold onto it.
-                let across = self.fans[x as usize].iter().find(|d| {
-                    d.face != corner.face && d.touches(y) && {
-                        let z = d.other(y);
-                        z != a && z != b
-                    }
-                });
-                if let Some(d) = across {
-                    // One corner of the face across is y, already at hand: only its third is read.
-                    let (pn, pp) = if d.next == y { (py, self.point(d.prev)) } else { (self.point(d.next), py) };
-                    let n_across = (pn - px).cross(pp - px).normalize_or_zero();
-                    if n_across.dot(n_new) < FOLD_DOT {
-                        self.fan_scratch = fan;
-                        return false;
-                    }
+                // fold onto it. Looked at only when the cones of x and y cannot rule that out.
+                let (vx, vy) = (&self.vertices[x as usize], &self.vertices[y as usize]);
+                let ruled_out = vx.cone.excludes_fold(vx.normal, n_new) || vy.cone.excludes_fold(vy.normal, n_new);
+                debug_assert!(!ruled_out || !self.folds_across(corner.face, a, b, [x, y], [px, py], n_new));
+                if !ruled_out && self.folds_across(corner.face, a, b, [x, y], [px, py], n_new) {
+                    self.fan_scratch = fan;
+                    return false;
                 }
                 fan.push(([x, y], n_new));
             }
@@ -659,12 +730,62 @@ impl<'o> State<'o> {
             self.corner_scratch = corners;
             folded
         };
+        self.fan_scratch = fan;
         if folded {
-            self.fan_scratch = fan;
             return false;
         }
-        self.fan_scratch = fan;
+        self.checked = Some((a, b, c.position.map(f32::to_bits)));
         true
+    }
+
+    /// Loads, all at once, what the checks and the collapse of (a, b) will read of the ring around
+    /// the edge: each neighbour's block (position, normal, cone) and fan. The loads do not depend
+    /// on each other, so their cache misses overlap instead of following one another through the
+    /// data-dependent branches of the checks.
+    #[inline]
+    fn touch_ring(&self, a: u32, b: u32) {
+        let mut sum = 0usize;
+        for v in [a, b] {
+            for corner in &self.fans[v as usize] {
+                let x = corner.next as usize;
+                let block = &self.vertices[x];
+                sum = sum
+                    .wrapping_add(self.fans[x].len())
+                    .wrapping_add(block.kind as usize)
+                    .wrapping_add(block.quadric.first_coefficient().to_bits() as usize);
+            }
+        }
+        std::hint::black_box(sum);
+    }
+
+    /// Loads the blocks of `vertices` (both cache lines) ahead of use, all at once.
+    #[inline]
+    fn touch_blocks(&self, vertices: impl Iterator<Item = u32>) {
+        let mut sum = 0usize;
+        for v in vertices {
+            let block = &self.vertices[v as usize];
+            sum = sum
+                .wrapping_add(block.kind as usize)
+                .wrapping_add(block.quadric.first_coefficient().to_bits() as usize);
+        }
+        std::hint::black_box(sum);
+    }
+
+    /// Whether the moved face `face` (now with unit normal `n_new`, far edge (x, y) at `px`, `py`)
+    /// folds onto the face across its far edge, which is not a face of the collapsing edge (a, b).
+    fn folds_across(&self, face: u32, a: u32, b: u32, [x, y]: [u32; 2], [px, py]: [DVec3; 2], n_new: DVec3) -> bool {
+        let across = self.fans[x as usize].iter().find(|d| {
+            d.face != face && d.touches(y) && {
+                let z = d.other(y);
+                z != a && z != b
+            }
+        });
+        across.is_some_and(|d| {
+            // One corner of the face across is y, already at hand: only its third is read.
+            let (pn, pp) = if d.next == y { (py, self.point(d.prev)) } else { (self.point(d.next), py) };
+            let n_across = (pn - px).cross(pp - px).normalize_or_zero();
+            n_across.dot(n_new) < FOLD_DOT
+        })
     }
 
     /// Applies a legal collapse and returns its log record.
@@ -711,9 +832,11 @@ impl<'o> State<'o> {
         self.fans[a as usize].reserve(count_b);
         for corner in moved.iter().filter(|d| !is_dead(d)) {
             let f = corner.face;
-            for slot in self.triangles[f as usize].iter_mut() {
-                if *slot == b {
-                    *slot = a;
+            if self.track_triangles {
+                for slot in self.triangles[f as usize].iter_mut() {
+                    if *slot == b {
+                        *slot = a;
+                    }
                 }
             }
             // The face's corners at its two other vertices name b: they now name a.
@@ -740,9 +863,55 @@ impl<'o> State<'o> {
             NormalUpdate::Linear if linear != DVec3::ZERO => linear,
             NormalUpdate::Linear | NormalUpdate::Recompute => self.fan_normal(a),
         };
+        let checked = self.checked.take() == Some((a, b, c.position.map(f32::to_bits)));
+        self.update_cones(a, checked);
         self.version[a as usize] = self.version[a as usize].wrapping_add(1);
         self.version[b as usize] = self.version[b as usize].wrapping_add(1);
         record
+    }
+
+    /// Keeps the [`NormalCone`]s exact after `a` moved and took over faces: each face around `a`
+    /// widens the cones of its two other corners, and `a`'s own cone is rebuilt around its new
+    /// normal from these faces alone (they are all its faces). With `checked`, the new normals are
+    /// the ones [`State::is_legal`] just computed for this collapse (its scratch holds exactly the
+    /// faces of `a`'s new fan); otherwise they are computed here.
+    fn update_cones(&mut self, a: u32, checked: bool) {
+        let axis = self.vertices[a as usize].normal;
+        let mut cone = NormalCone::EMPTY;
+        if checked {
+            debug_assert_eq!(self.fan_scratch.len(), self.fans[a as usize].len());
+            for &([x, y], n) in &self.fan_scratch {
+                cone.widen(axis, n);
+                for v in [x, y] {
+                    let vertex = &mut self.vertices[v as usize];
+                    vertex.cone.widen(vertex.normal, n);
+                }
+            }
+            self.vertices[a as usize].cone = cone;
+            return;
+        }
+        let p = self.point(a);
+        for i in 0..self.fans[a as usize].len() {
+            let Corner { next: x, prev: y, .. } = self.fans[a as usize][i];
+            let (px, py) = (self.point(x), self.point(y));
+            let cross = (px - p).cross(py - p);
+            let area2 = cross.length();
+            // `is_legal` refuses collapses that make a face this poor; a caller that skipped it
+            // gets cones that never rule a fold out, not wrong ones.
+            if area2 == 0.0 || triangle_quality(area2, p, px, py) < CONE_MIN_QUALITY {
+                cone = NormalCone::NEVER;
+                self.vertices[x as usize].cone = NormalCone::NEVER;
+                self.vertices[y as usize].cone = NormalCone::NEVER;
+                continue;
+            }
+            let n = cross / area2;
+            cone.widen(axis, n);
+            for v in [x, y] {
+                let vertex = &mut self.vertices[v as usize];
+                vertex.cone.widen(vertex.normal, n);
+            }
+        }
+        self.vertices[a as usize].cone = cone;
     }
 
     /// A fresh stamp for the scratch marks (every mark is older).
@@ -841,6 +1010,7 @@ impl<'o> State<'o> {
                 .map(|(&position, kind)| VertexData { position, kind, ..Default::default() })
                 .collect(),
             triangles: mesh.triangles.clone(),
+            track_triangles: true,
             face_alive: vec![true; mesh.face_count()],
             fans,
             vertex_alive: vec![true; vertex_count],
@@ -849,6 +1019,7 @@ impl<'o> State<'o> {
             mark_stamp: 0,
             fan_scratch: Vec::new(),
             corner_scratch: Vec::new(),
+            checked: None,
             cos_max_normal_change: options.max_normal_change_degrees.to_radians().cos(),
         };
         if options.boundary == BoundaryMode::Lock {
@@ -861,14 +1032,20 @@ impl<'o> State<'o> {
         // Quadrics: area-weighted face planes, plus boundary planes perpendicular to boundary faces.
         // Vertex normals (Gouraud: the mean of the unit normals of the faces around) gathered in the
         // same pass.
+        // Same pass: each face's unit normal for the normal cones once the vertex normals are
+        // known, NaN where the face is too poor for a cone (NaN makes the cone unusable).
+        let mut face_units = Vec::with_capacity(mesh.face_count());
         for (f, t) in mesh.triangles.iter().enumerate() {
             let [pa, pb, pc] = mesh.triangle_points(f);
             let n = (pb - pa).cross(pc - pa);
             let area = 0.5 * n.length();
             if area == 0.0 {
+                face_units.push(DVec3::NAN);
                 continue;
             }
             let unit = n / (2.0 * area);
+            let usable = triangle_quality(2.0 * area, pa, pb, pc) >= CONE_MIN_QUALITY;
+            face_units.push(if usable { unit } else { DVec3::NAN });
             // `n.normalize()` rather than `unit` (equal up to the last bit): the collapse order,
             // and so the documented figures, follow these exact bits — bunny at 90% moves from
             // 0.006502 to 0.007331 with `unit` (see docs/simplify-report.md, sensitivity).
@@ -881,6 +1058,12 @@ impl<'o> State<'o> {
         }
         for vertex in state.vertices.iter_mut() {
             vertex.normal = vertex.normal.normalize_or_zero();
+        }
+        for (t, &unit) in mesh.triangles.iter().zip(&face_units) {
+            for &v in t {
+                let vertex = &mut state.vertices[v as usize];
+                vertex.cone.widen(vertex.normal, unit);
+            }
         }
         for &(a, b, f) in &boundary_edges {
             let [p0, p1, p2] = mesh.triangle_points(f as usize);
@@ -896,6 +1079,22 @@ impl<'o> State<'o> {
             state.vertices[b as usize].quadric += q;
         }
         (state, edges)
+    }
+
+    /// Brings `triangles` up to date after a run without tracking: every corner names the vertex
+    /// its input vertex was merged into, last merge first (the same as renaming at each collapse).
+    pub(crate) fn rebuild_triangles(&mut self, log: &[CollapseRecord]) {
+        if self.track_triangles {
+            return;
+        }
+        let mut last: Vec<u32> = (0..self.vertices.len() as u32).collect();
+        for record in log.iter().rev() {
+            last[record.removed as usize] = last[record.survivor as usize];
+        }
+        for t in self.triangles.iter_mut() {
+            *t = t.map(|v| last[v as usize]);
+        }
+        self.track_triangles = true;
     }
 
     /// The surviving mesh: live vertices in input order, live faces in input order.
@@ -1216,10 +1415,19 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     let target = target_faces(options, faces_in)?;
     let units = DistanceUnits::new(&prepared.surface_bounds().expect("has faces"));
     let (mut state, edges) = State::new(&prepared, options);
+    // Melax's cost reads face normals through the triangle array; the quadric costs never do.
+    state.track_triangles = options.metric == Metric::Melax;
     let vertex_count = prepared.vertex_count();
 
     // Heapify once (linear) rather than pushing edge by edge.
-    let mut heap = CollapseQueue::from_vec(edges.iter().filter_map(|&[a, b]| state.entry(a, b)).collect());
+    // The edges come sorted by their lower end, so the higher end's block is the one not in cache:
+    // loading a chunk's worth of them first lets their misses overlap.
+    let mut entries = Vec::with_capacity(edges.len());
+    for chunk in edges.chunks(16) {
+        state.touch_blocks(chunk.iter().map(|e| e[1]));
+        entries.extend(chunk.iter().filter_map(|&[a, b]| state.entry(a, b)));
+    }
+    let mut heap = CollapseQueue::from_vec(entries);
     drop(edges);
 
     let mut faces_alive = faces_in;
@@ -1290,6 +1498,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
         }
     };
 
+    state.rebuild_triangles(&log);
     let simplified = state.output_mesh();
     let progressive = options.record_progressive.then(|| {
         ProgressiveMesh::from_log(
