@@ -376,8 +376,11 @@ impl NormalCone {
     #[inline]
     fn excludes_fold(self, axis: DVec3, n: DVec3) -> bool {
         let d = axis.dot(n);
+        let cos = self.cos();
+        // With √(1 − d²) ≤ 1 first (no square root): enough for the usual nearly flat fan.
         d >= FOLD_DOT + CONE_MARGIN
-            && self.cos() >= FOLD_DOT * d + FOLD_SIN * (1.0 - d * d).max(0.0).sqrt() + CONE_MARGIN
+            && (cos >= FOLD_DOT * d + FOLD_SIN + CONE_MARGIN
+                || cos >= FOLD_DOT * d + FOLD_SIN * (1.0 - d * d).max(0.0).sqrt() + CONE_MARGIN)
     }
 }
 
@@ -1582,6 +1585,59 @@ mod tests {
     use super::*;
     use crate::procedural;
     use crate::topology::Topology;
+
+    fn random_unit(rng: &mut crate::rng::SplitMix64) -> DVec3 {
+        loop {
+            let v = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 2.0 - DVec3::ONE;
+            if (0.01..=1.0).contains(&v.length_squared()) {
+                return v.normalize();
+            }
+        }
+    }
+
+    #[test]
+    fn normal_cone_rounds_down_and_refuses_nan() {
+        let mut rng = crate::rng::SplitMix64::new(7);
+        for c in [-1.0, -0.9, 0.0, 0.5, 1.0, 1.0 + 1e-12, -1.0 - 1e-12]
+            .into_iter()
+            .chain((0..1000).map(|_| rng.next_f64() * 2.0 - 1.0))
+        {
+            assert!(NormalCone::at_least(c).cos() <= c, "{c}");
+            assert!(NormalCone::at_least(c).cos() > c - 1e-4, "{c}: too loose");
+        }
+        assert_eq!(NormalCone::at_least(f64::NAN), NormalCone::NEVER);
+        // NEVER rules nothing out, not even a face with the axis' own normal.
+        assert!(!NormalCone::NEVER.excludes_fold(DVec3::Z, DVec3::Z));
+        assert!(NormalCone::EMPTY.excludes_fold(DVec3::Z, DVec3::Z));
+    }
+
+    /// Whenever a cone rules a fold out, no normal it was widened with folds onto the moved face;
+    /// and it does rule out most of the harmless cases and none of the folds.
+    #[test]
+    fn normal_cone_rules_out_only_impossible_folds() {
+        let mut rng = crate::rng::SplitMix64::new(11);
+        let (mut ruled_out, mut folds) = (0, 0);
+        for _ in 0..2000 {
+            let axis = random_unit(&mut rng);
+            // Faces within a random spread of the axis, as around a vertex.
+            let spread = rng.next_f64() * 1.5;
+            let faces: Vec<DVec3> =
+                (0..6).map(|_| (axis + random_unit(&mut rng) * spread * rng.next_f64()).normalize()).collect();
+            let mut cone = NormalCone::EMPTY;
+            faces.iter().for_each(|&f| cone.widen(axis, f));
+            for _ in 0..8 {
+                let n = (axis + random_unit(&mut rng) * rng.next_f64() * 3.0).normalize();
+                let folded = faces.iter().any(|f| f.dot(n) < FOLD_DOT);
+                folds += folded as usize;
+                if cone.excludes_fold(axis, n) {
+                    assert!(!folded, "cone {cone:?} around {axis} ruled out a fold of {n}");
+                    ruled_out += 1;
+                }
+            }
+        }
+        assert!(folds > 100, "the cases include folds ({folds})");
+        assert!(ruled_out > 8000, "the cone rules out most harmless cases ({ruled_out} of 16000)");
+    }
 
     /// The classification from the edge table (sorted half-edges) and the validator's fan count:
     /// an independent route to what [`scan_fans`] finds from the fans alone.
