@@ -51,13 +51,6 @@ impl Quadric {
         Quadric { weight: 0.0, ..Quadric::from_plane(normal, point, weight) }
     }
 
-    /// The first coefficient: reading it loads the quadric's first cache line (the simplifier
-    /// touches the blocks of a neighbourhood ahead of use).
-    #[inline]
-    pub(crate) fn first_coefficient(&self) -> f64 {
-        self.a2
-    }
-
     /// `vᵀ Q v`: the weighted sum of squared plane distances at `v` (never negative).
     #[inline(always)]
     pub fn error(&self, v: DVec3) -> f64 {

@@ -101,6 +101,12 @@ impl CollapseQueue {
         self.entries[i] = entry;
     }
 
+    /// The entry `pop` would return next.
+    #[inline]
+    pub(crate) fn peek(&self) -> Option<&QueueEntry> {
+        self.entries.first()
+    }
+
     pub(crate) fn pop(&mut self) -> Option<QueueEntry> {
         let last = self.entries.pop()?;
         if self.entries.is_empty() {
