@@ -14,6 +14,7 @@ pub mod io;
 pub mod mesh;
 pub mod pm;
 pub mod pm_format;
+mod prefetch;
 pub mod procedural;
 pub mod quadric;
 mod queue;

@@ -1,9 +1,13 @@
 //! The collapse queue: a 4-ary min-heap of 16-byte entries.
 //!
-//! The simplifier pops about ten entries per collapse (most of them stale), so the queue's memory
-//! traffic is a large share of its time. Two choices keep it small: an entry is 16 bytes (four to a
-//! cache line) and the heap is 4-ary, so a pop walks half as many levels as a binary heap and reads
-//! the four children of a node from one or two cache lines.
+//! The simplifier pushes about seven entries per collapse and pops one or two (a stale one is
+//! skipped), and the lower levels of a heap of 100 k entries are not in cache, so the queue's
+//! memory traffic is a large share of its time. An entry is 16 bytes (four to a cache line); the
+//! heap is 4-ary, so a pop walks half as many levels as a binary heap and reads the four children
+//! of a node from one or two cache lines; and while a pop compares four children it asks for the
+//! lines of their children, one of which it reads next.
+
+use crate::prefetch::prefetch;
 
 /// A queued candidate collapse of edge {a, b}, ordered by `(key, a)`: one integer comparison.
 /// Entries that tie on both still pop in an order fixed by the push sequence, so a run is
@@ -127,6 +131,13 @@ impl CollapseQueue {
                 break;
             }
             let end = (first + ARITY).min(n);
+            // The next level is one of four groups below these children: asking for all four
+            // while these are compared hides most of the wait for the one that is taken.
+            for c in first..end {
+                if let Some(grandchild) = self.entries.get(ARITY * c + 1) {
+                    prefetch(grandchild);
+                }
+            }
             let mut best = first;
             let mut best_rank = self.entries[first].rank();
             for c in first + 1..end {

@@ -59,6 +59,7 @@ use crate::error::MeshError;
 use crate::hausdorff::{HausdorffOptions, HausdorffReport, hausdorff};
 use crate::mesh::{DistanceUnits, Mesh};
 use crate::pm::{CollapseRecord, ProgressiveMesh};
+use crate::prefetch::prefetch;
 use crate::quadric::Quadric;
 use crate::queue::{CollapseQueue, QueueEntry, order_key};
 
@@ -262,15 +263,6 @@ const BOUNDARY_WEIGHT: f64 = 10.0;
 const CANCEL_CHECK_INTERVAL: usize = 256;
 
 pub(crate) const NONE: u32 = u32::MAX;
-
-/// A hint to bring the cache line holding `value` into the cache; nothing on targets without one.
-#[inline(always)]
-fn prefetch<T>(value: &T) {
-    #[cfg(target_arch = "x86_64")]
-    safe_arch::prefetch_t0(value);
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = value;
-}
 
 /// Vertex classification fixed at the start.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
