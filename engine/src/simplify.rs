@@ -1010,8 +1010,15 @@ impl<'o> State<'o> {
     /// normals. Also returns every undirected edge once, as `[low, high]`, sorted.
     pub(crate) fn new(mesh: &Mesh, options: &'o SimplifyOptions) -> (State<'o>, Vec<[u32; 2]>) {
         let vertex_count = mesh.vertex_count();
+        // The passes over the faces below write to their corners' fans and blocks, in the input's
+        // vertex order, which can be far from its face order: each asks for the data of the face
+        // `AHEAD` places on while it works on this one.
+        const AHEAD: usize = 8;
         let mut fans = vec![Fan::new(); vertex_count];
         for (f, &[x, y, z]) in mesh.triangles.iter().enumerate() {
+            if let Some(t) = mesh.triangles.get(f + AHEAD) {
+                t.iter().for_each(|&v| prefetch(&fans[v as usize]));
+            }
             let face = f as u32;
             fans[x as usize].push(Corner { face, next: y, prev: z });
             fans[y as usize].push(Corner { face, next: z, prev: x });
@@ -1054,6 +1061,13 @@ impl<'o> State<'o> {
         // known, NaN where the face is too poor for a cone (NaN makes the cone unusable).
         let mut face_units = Vec::with_capacity(mesh.face_count());
         for (f, t) in mesh.triangles.iter().enumerate() {
+            if let Some(t) = mesh.triangles.get(f + AHEAD) {
+                for &v in t {
+                    let block = &state.vertices[v as usize];
+                    prefetch(&block.quadric);
+                    prefetch(&block.normal);
+                }
+            }
             let [pa, pb, pc] = mesh.triangle_points(f);
             let n = (pb - pa).cross(pc - pa);
             let area = 0.5 * n.length();
@@ -1077,7 +1091,10 @@ impl<'o> State<'o> {
         for vertex in state.vertices.iter_mut() {
             vertex.normal = vertex.normal.normalize_or_zero();
         }
-        for (t, &unit) in mesh.triangles.iter().zip(&face_units) {
+        for (f, (t, &unit)) in mesh.triangles.iter().zip(&face_units).enumerate() {
+            if let Some(t) = mesh.triangles.get(f + AHEAD) {
+                t.iter().for_each(|&v| prefetch(&state.vertices[v as usize].normal));
+            }
             for &v in t {
                 let vertex = &mut state.vertices[v as usize];
                 vertex.cone.widen(vertex.normal, unit);
