@@ -286,7 +286,7 @@ pub(crate) struct State<'o> {
     pub(crate) track_triangles: bool,
     pub(crate) face_alive: Vec<bool>,
     /// The live faces around each vertex, with their other two corners.
-    pub(crate) fans: Vec<Fan>,
+    pub(crate) fans: Vec<FanSlot>,
     pub(crate) vertex_alive: Vec<bool>,
     pub(crate) version: Vec<u32>,
     /// Scratch marks for the link condition.
@@ -420,6 +420,49 @@ const FAN_INLINE: usize = 8;
 
 /// The faces around one vertex.
 pub(crate) type Fan = SmallVec<[Corner; FAN_INLINE]>;
+
+/// A [`Fan`] in two whole cache lines of its own: 104 bytes at a 104-byte stride straddle three
+/// lines half of the time, and a prefetch hint can only name the first and the last of them
+/// ([`FanSlot::prefetch`]). Derefs to the fan.
+#[derive(Debug, Clone, Default)]
+#[repr(C, align(64))]
+pub(crate) struct FanSlot {
+    fan: Fan,
+    /// Marks the fan's end: its address lies in the second line.
+    end: [u8; 0],
+}
+
+const _: () = assert!(std::mem::size_of::<FanSlot>() == 128);
+
+impl FanSlot {
+    /// Asks the cache for both lines of the fan.
+    #[inline]
+    pub(crate) fn prefetch(&self) {
+        prefetch(&self.fan);
+        prefetch(&self.end);
+    }
+}
+
+impl std::ops::Deref for FanSlot {
+    type Target = Fan;
+    fn deref(&self) -> &Fan {
+        &self.fan
+    }
+}
+
+impl<'a> IntoIterator for &'a FanSlot {
+    type Item = &'a Corner;
+    type IntoIter = std::slice::Iter<'a, Corner>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.fan.iter()
+    }
+}
+
+impl std::ops::DerefMut for FanSlot {
+    fn deref_mut(&mut self) -> &mut Fan {
+        &mut self.fan
+    }
+}
 
 /// A collapse ready to apply: `removed` merges into `survivor`, which moves to `position`.
 #[derive(Debug, Clone, Copy)]
@@ -754,10 +797,7 @@ impl<'o> State<'o> {
                 let block = &self.vertices[x];
                 prefetch(&block.quadric);
                 prefetch(&block.position);
-                prefetch(&self.fans[x]);
-                if let Some(after) = self.fans.get(x + 1) {
-                    prefetch(after);
-                }
+                self.fans[x].prefetch();
             }
         }
     }
@@ -772,10 +812,7 @@ impl<'o> State<'o> {
             let block = &self.vertices[v];
             prefetch(&block.quadric);
             prefetch(&block.position);
-            prefetch(&self.fans[v]);
-            if let Some(after) = self.fans.get(v + 1) {
-                prefetch(after);
-            }
+            self.fans[v].prefetch();
         }
     }
 
@@ -1014,10 +1051,10 @@ impl<'o> State<'o> {
         // vertex order, which can be far from its face order: each asks for the data of the face
         // `AHEAD` places on while it works on this one.
         const AHEAD: usize = 8;
-        let mut fans = vec![Fan::new(); vertex_count];
+        let mut fans = vec![FanSlot::default(); vertex_count];
         for (f, &[x, y, z]) in mesh.triangles.iter().enumerate() {
             if let Some(t) = mesh.triangles.get(f + AHEAD) {
-                t.iter().for_each(|&v| prefetch(&fans[v as usize]));
+                t.iter().for_each(|&v| fans[v as usize].prefetch());
             }
             let face = f as u32;
             fans[x as usize].push(Corner { face, next: y, prev: z });
@@ -1227,7 +1264,7 @@ struct Scan {
 /// vertex looks only at its own fan (both ends of an edge see the same faces, so they agree).
 /// Fans of the usual size are scanned by counting ([`scan_small_fan`]); a hub vertex by sorting
 /// ([`scan_large_fan`]), so that the time stays O(valence · log valence).
-fn scan_fans(fans: &[Fan]) -> Scan {
+fn scan_fans(fans: &[FanSlot]) -> Scan {
     let mut scan = Scan { kind: Vec::with_capacity(fans.len()), edges: Vec::new(), boundary_edges: Vec::new() };
     let mut scratch = LargeFanScratch::default();
     for (v, fan) in fans.iter().enumerate() {
