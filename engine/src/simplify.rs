@@ -46,6 +46,10 @@
 //! 5. no surviving face becomes a needle or zero-area triangle ([`MIN_TRIANGLE_QUALITY`]);
 //! 6. no fold: no moved face turns back onto the unmoved face across its far edge, and no two moved
 //!    faces that share an edge turn back onto each other (normals' dot product below [`FOLD_DOT`]).
+//!    The face across is looked at only when the normal cones of the far edge's two ends
+//!    (`NormalCone`: how far the faces around a vertex stray from its normal) leave a fold
+//!    possible (one moved face in 600 to 10 000 on bunny, nefertiti and fandisk); debug builds check
+//!    every skipped one anyway.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering as AtomicOrdering};
