@@ -64,7 +64,7 @@ impl CollapseQueue {
         let n = queue.entries.len();
         if n > 1 {
             for i in (0..=(n - 2) / ARITY).rev() {
-                queue.sift_down(i);
+                queue.sift_down::<false>(i);
             }
         }
         queue
@@ -117,11 +117,14 @@ impl CollapseQueue {
             return Some(last);
         }
         let top = std::mem::replace(&mut self.entries[0], last);
-        self.sift_down(0);
+        self.sift_down::<true>(0);
         Some(top)
     }
 
-    fn sift_down(&mut self, mut i: usize) {
+    /// With `PREFETCH`, asks for the next level's lines while comparing the current one: a pop
+    /// walks from the root to a random leaf; heapifying walks the array backwards, which the
+    /// hardware prefetcher follows by itself.
+    fn sift_down<const PREFETCH: bool>(&mut self, mut i: usize) {
         let n = self.entries.len();
         let entry = self.entries[i];
         let rank = entry.rank();
@@ -133,9 +136,11 @@ impl CollapseQueue {
             let end = (first + ARITY).min(n);
             // The next level is one of four groups below these children: asking for all four
             // while these are compared hides most of the wait for the one that is taken.
-            for c in first..end {
-                if let Some(grandchild) = self.entries.get(ARITY * c + 1) {
-                    prefetch(grandchild);
+            if PREFETCH {
+                for c in first..end {
+                    if let Some(grandchild) = self.entries.get(ARITY * c + 1) {
+                        prefetch(grandchild);
+                    }
                 }
             }
             let mut best = first;
