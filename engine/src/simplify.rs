@@ -326,6 +326,16 @@ pub(crate) struct VertexData {
 
 const _: () = assert!(std::mem::size_of::<VertexData>() == 128);
 
+impl VertexData {
+    /// Asks the cache for both lines of the block (the quadric starts the first; normal, position,
+    /// class and cone fill the second).
+    #[inline]
+    pub(crate) fn prefetch(&self) {
+        prefetch(&self.quadric);
+        prefetch(&self.position);
+    }
+}
+
 /// Faces whose quality (`4√3·area / Σ edge²`) is below this at the start make their corners'
 /// [`NormalCone`]s unusable: the normal of such a face depends on which corner its cross product
 /// starts from by more than the cone test's margin. Every face a collapse creates is far above it
@@ -363,7 +373,7 @@ impl NormalCone {
         // One step below the truncated value, so never above `cos` (a float-to-int cast
         // truncates toward zero and saturates; `floor` would be a library call). `max` maps NaN
         // to the lowest value, which no test passes.
-        NormalCone((cos * 32767.0 - 1.0).max(i16::MIN as f64) as i16)
+        NormalCone((cos * 32767.0 - 1.0).max(NormalCone::NEVER.0 as f64) as i16)
     }
 
     fn cos(self) -> f64 {
@@ -798,9 +808,7 @@ impl<'o> State<'o> {
         for v in [a, b] {
             for corner in &self.fans[v as usize] {
                 let x = corner.next as usize;
-                let block = &self.vertices[x];
-                prefetch(&block.quadric);
-                prefetch(&block.position);
+                self.vertices[x].prefetch();
                 self.fans[x].prefetch();
             }
         }
@@ -813,20 +821,8 @@ impl<'o> State<'o> {
     fn prefetch_edge(&self, a: u32, b: u32) {
         for v in [a as usize, b as usize] {
             prefetch(&self.version[v]);
-            let block = &self.vertices[v];
-            prefetch(&block.quadric);
-            prefetch(&block.position);
+            self.vertices[v].prefetch();
             self.fans[v].prefetch();
-        }
-    }
-
-    /// Asks the cache for the blocks of `vertices` (both lines).
-    #[inline]
-    fn prefetch_blocks(&self, vertices: impl Iterator<Item = u32>) {
-        for v in vertices {
-            let block = &self.vertices[v as usize];
-            prefetch(&block.quadric);
-            prefetch(&block.position);
         }
     }
 
@@ -1097,17 +1093,12 @@ impl<'o> State<'o> {
         }
         // Quadrics: area-weighted face planes, plus boundary planes perpendicular to boundary faces.
         // Vertex normals (Gouraud: the mean of the unit normals of the faces around) gathered in the
-        // same pass.
-        // Same pass: each face's unit normal for the normal cones once the vertex normals are
-        // known, NaN where the face is too poor for a cone (NaN makes the cone unusable).
+        // same pass, and each face's unit normal kept for the normal cones, which need the vertex
+        // normals first: NaN where the face is too poor for a cone (NaN makes the cone unusable).
         let mut face_units = Vec::with_capacity(mesh.face_count());
         for (f, t) in mesh.triangles.iter().enumerate() {
             if let Some(t) = mesh.triangles.get(f + AHEAD) {
-                for &v in t {
-                    let block = &state.vertices[v as usize];
-                    prefetch(&block.quadric);
-                    prefetch(&block.normal);
-                }
+                t.iter().for_each(|&v| state.vertices[v as usize].prefetch());
             }
             let [pa, pb, pc] = mesh.triangle_points(f);
             let n = (pb - pa).cross(pc - pa);
@@ -1502,7 +1493,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     let mut entries = Vec::with_capacity(edges.len());
     for (i, chunk) in edges.chunks(CHUNK).enumerate() {
         let ahead = edges.get((i + 1) * CHUNK..((i + 2) * CHUNK).min(edges.len())).unwrap_or_default();
-        state.prefetch_blocks(ahead.iter().map(|e| e[1]));
+        ahead.iter().for_each(|e| state.vertices[e[1] as usize].prefetch());
         entries.extend(chunk.iter().filter_map(|&[a, b]| state.entry(a, b)));
     }
     let mut heap = CollapseQueue::from_vec(entries);
