@@ -148,6 +148,15 @@ fn simplify_pm_lod_chain() {
         let r = ok_json(&["simplify", s(&input), "-o", s(&out), "--faces", "500", "--metric", metric, "--json"]);
         assert_eq!(r["metric"], metric);
     }
+    // The distance guard: `--guard` alone is weight 1, a value sets it; refused with Melax.
+    assert_eq!(report["guard"], 0.0);
+    let guarded = ok_json(&["simplify", s(&input), "-o", s(&out), "--ratio", "0.9", "--guard", "--json"]);
+    assert_eq!(guarded["guard"], 1.0);
+    assert_eq!(guarded["faces_out"], report["faces_out"]);
+    let weighted = ok_json(&["simplify", s(&input), "-o", s(&out), "--ratio", "0.9", "--guard", "0.3", "--json"]);
+    assert_eq!(weighted["guard"], 0.3);
+    fails_with(&["simplify", s(&input), "-o", s(&out), "--guard=-1"], "guard");
+    fails_with(&["simplify", s(&input), "-o", s(&out), "--metric", "melax", "--guard"], "guard");
 }
 
 #[test]

@@ -102,6 +102,16 @@ async fn every_rpc_over_loopback() {
     let local = simplify(&mesh, &SimplifyOptions { target_ratio: Some(0.9), ..Default::default() }).unwrap();
     assert_eq!(local.mesh, out);
 
+    // The distance guard travels in the options: the same result as in process, not the unguarded one.
+    let mut request = simplify_request(&mesh, 0.9);
+    request.options.as_mut().unwrap().guard = Some(1.0);
+    let guarded = client.simplify(request).await.unwrap().into_inner();
+    let guarded = mesh_from_proto(guarded.mesh.as_ref().unwrap(), "mesh", &MeshLimits::default()).unwrap();
+    let local =
+        simplify(&mesh, &SimplifyOptions { target_ratio: Some(0.9), guard: 1.0, ..Default::default() }).unwrap();
+    assert_eq!(local.mesh, guarded);
+    assert_ne!(guarded, out, "the guard changes the collapse order on a bumpy blob");
+
     // The same request uploaded in small chunks (client streaming) gives the same result.
     let unary = client.simplify(simplify_request(&mesh, 0.8)).await.unwrap().into_inner();
     let whole = mesh_to_proto(&mesh);
@@ -321,6 +331,24 @@ async fn invalid_requests_name_the_field() {
                 ..simplify_request(&procedural::icosphere(2), 0.5)
             },
             "options.w",
+        ),
+        (
+            proto::SimplifyRequest {
+                options: Some(proto::SimplifyOptions { guard: Some(-1.0), ..Default::default() }),
+                ..simplify_request(&procedural::icosphere(2), 0.5)
+            },
+            "options.guard",
+        ),
+        (
+            proto::SimplifyRequest {
+                options: Some(proto::SimplifyOptions {
+                    guard: Some(1.0),
+                    metric: proto::Metric::Melax as i32,
+                    ..Default::default()
+                }),
+                ..simplify_request(&procedural::icosphere(2), 0.5)
+            },
+            "guard",
         ),
         (simplify_request(&procedural::icosphere(4), 0.5), "mesh too large"),
     ];

@@ -116,6 +116,27 @@ impl TriangleBvh {
         self.faces.is_empty()
     }
 
+    /// Squared distance from `query` to the triangle in `slot` (infinite for a slot out of range).
+    #[inline]
+    pub fn slot_distance_squared(&self, query: DVec3, slot: u32) -> f64 {
+        match self.corners.get(slot as usize) {
+            Some(&[a, b, c]) => (closest_point_on_triangle(query, a, b, c) - query).length_squared(),
+            None => f64::INFINITY,
+        }
+    }
+
+    /// The slot of each face of the mesh the tree was built from (`u32::MAX` for a face left out),
+    /// for use as hints.
+    pub fn slots_by_face(&self, faces: usize) -> Vec<u32> {
+        let mut slots = vec![u32::MAX; faces];
+        for (slot, &f) in self.faces.iter().enumerate() {
+            if let Some(s) = slots.get_mut(f as usize) {
+                *s = slot as u32;
+            }
+        }
+        slots
+    }
+
     /// Closest point on the surface to `query`. `hint` is a slot from an earlier result whose
     /// triangle is probably close; it only affects speed, never the answer.
     pub fn closest_point(&self, query: DVec3, hint: Option<u32>) -> ClosestPoint {

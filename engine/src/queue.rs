@@ -33,7 +33,7 @@ impl QueueEntry {
     }
 
     #[inline]
-    fn rank(&self) -> u64 {
+    pub(crate) fn rank(&self) -> u64 {
         self.rank
     }
 }

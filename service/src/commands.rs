@@ -172,6 +172,11 @@ pub(crate) struct SimplifyArgs {
     /// Largest change of a face normal one collapse may cause, in degrees.
     #[arg(long, default_value_t = 90.0)]
     pub(crate) max_normal_change: f64,
+    /// Distance guard: each collapse also pays for the distance it opens between the result and
+    /// the input, measured both ways. Lower Hausdorff distance on most meshes (a thin tip is no
+    /// longer shortened for free) at 10–25× the time. `--guard` alone is weight 1; 0 is off.
+    #[arg(long, value_name = "WEIGHT", num_args = 0..=1, default_missing_value = "1", default_value_t = 0.0)]
+    pub(crate) guard: f64,
     /// Also write the progressive mesh (base + vertex splits) to this .pm file.
     #[arg(long)]
     pub(crate) pm: Option<PathBuf>,
@@ -422,6 +427,7 @@ impl SimplifyArgs {
             },
             max_normal_change_degrees: self.max_normal_change,
             record_progressive: self.pm.is_some(),
+            guard: self.guard,
             cancel: None,
         }
     }
@@ -496,6 +502,7 @@ pub(crate) fn simplify_report(args: &SimplifyArgs) -> Result<serde_json::Value> 
         "placement": options.placement,
         "normals": options.normals,
         "boundary": options.boundary,
+        "guard": options.guard,
         "collapses": stats.collapses,
         "stop_reason": stats.stop_reason,
         "max_collapse_error": stats.max_collapse_error,

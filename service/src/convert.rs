@@ -201,6 +201,11 @@ pub fn simplify_options(o: &proto::SimplifyOptions, w: f64) -> Result<SimplifyOp
     if !(0.0..=2.0).contains(&w) {
         return Err(invalid("options.w", format!("{w} is outside [0, 2]")));
     }
+    if let Some(g) = o.guard
+        && !(g.is_finite() && g >= 0.0)
+    {
+        return Err(invalid("options.guard", format!("{g} must be a finite number ≥ 0")));
+    }
     let target_ratio = match (o.target_faces, o.target_ratio) {
         (None, None) => Some(0.5),
         (_, r) => r,
@@ -215,6 +220,7 @@ pub fn simplify_options(o: &proto::SimplifyOptions, w: f64) -> Result<SimplifyOp
         boundary,
         max_normal_change_degrees: o.max_normal_change_degrees.unwrap_or(90.0),
         record_progressive: o.return_progressive,
+        guard: o.guard.unwrap_or(0.0),
         cancel: None,
     })
 }

@@ -186,6 +186,7 @@ pub(crate) fn simplify_request(args: &SimplifyArgs) -> Result<proto::SimplifyReq
             },
             w_auto: args.w == WArg::Auto,
             w_search: args.w == WArg::Search,
+            guard: (args.guard != 0.0).then_some(args.guard),
             placement: match args.placement {
                 PlacementArg::Optimal => proto::Placement::Optimal,
                 PlacementArg::Paper => proto::Placement::Paper,
