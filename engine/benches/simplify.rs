@@ -4,6 +4,8 @@
 //!
 //! Run: `cargo bench -p meshlod-engine --bench simplify` (needs the shared meshes; the 2-million
 //! triangle case is ogre subdivided twice, or a procedural torus without them). `MESHLOD_BENCH_QUICK=1` runs one repetition.
+//! The "with the distance guard" lines price that option (`SimplifyOptions::guard`); the 2×
+//! target is for the lines without it.
 
 // The peak-tracking allocator needs `unsafe` (GlobalAlloc); benches only.
 #[allow(unsafe_code, dead_code)]
@@ -28,7 +30,7 @@ fn meshopt_simplify(mesh: &Mesh, target_faces: usize) -> Mesh {
     Mesh::new(mesh.positions.clone(), out.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect()).expect("valid")
 }
 
-fn case(name: &str, mesh: &Mesh, keep: f64, runs: usize, measure_error: bool) {
+fn case(name: &str, mesh: &Mesh, keep: f64, runs: usize, measure_error: bool, guard: f64) {
     let faces_in = mesh.face_count();
     let target = ((faces_in as f64) * keep).round() as usize;
     let options = SimplifyOptions {
@@ -36,6 +38,7 @@ fn case(name: &str, mesh: &Mesh, keep: f64, runs: usize, measure_error: bool) {
         target_ratio: None,
         metric: Metric::Qfvp { w: 1.0 },
         record_progressive: true,
+        guard,
         ..Default::default()
     };
     let ((ours, ours_time), (peer, peer_time)) =
@@ -74,8 +77,11 @@ fn main() {
                 let mesh = read_mesh(dir.join(format!("{name}.obj"))).expect("shared mesh reads");
                 let (mesh, _, _) = meshlod_engine::simplify::prepare(&mesh);
                 for keep in [0.1, 0.01] {
-                    case(&format!("{name} keep {:.0}%", keep * 100.0), &mesh, keep, runs, true);
+                    case(&format!("{name} keep {:.0}%", keep * 100.0), &mesh, keep, runs, true, 0.0);
                 }
+                // The distance guard's price (an option, off by default), against the same peer.
+                let label = format!("{name} keep 10% with the distance guard (weight 1)");
+                case(&label, &mesh, 0.1, runs.min(2), true, 1.0);
             }
         }
         None => eprintln!("!!! shared meshes not found (set MESHLOD_MESHES): only the procedural case runs !!!"),
@@ -95,5 +101,6 @@ fn main() {
         0.01,
         if quick { 1 } else { 2 },
         false,
+        0.0,
     );
 }

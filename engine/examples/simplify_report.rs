@@ -72,6 +72,7 @@ fn main() {
     println!("best 0.032823; stanford-bunny 80%: 0.004618; 90%: 0.006265.\n");
 
     sensitivity(&meshes);
+    guard_tables(&meshes);
 
     println!("## Placement — Hausdorff at 90% reduction\n");
     println!(
@@ -141,6 +142,97 @@ fn main() {
             );
         }
     }
+}
+
+fn measure_once(mesh: &Mesh, options: &SimplifyOptions) -> f64 {
+    let out = simplify(mesh, options).expect("simplifies");
+    hausdorff(mesh, &out.mesh, &HausdorffOptions::default()).expect("measures").hausdorff
+}
+
+/// The distance guard (`SimplifyOptions::guard`): errors by w at weight 1, the weight's effect at
+/// w = 0, its time, and its spread on one-ulp copies of cow and bunny.
+fn guard_tables(meshes: &[(&str, Mesh)]) {
+    println!("## Table 1b — with the distance guard (weight 1)\n");
+    println!("`guard = 1`: each collapse also pays `A·d²` for the distance d it opens between result and input,");
+    println!(
+        "measured both ways (see `meshlod_engine::simplify`, \"The distance guard\"). Times: best of 3 at w = 0.\n"
+    );
+    println!(
+        "| mesh | reduction | unguarded w=0 | w=0 | w=0.5 | w=1 | w=1.5 | w=2 | best w | unguarded ms | guarded ms | time ratio |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let (mut lower, mut cases) = (0, 0);
+    for (name, mesh) in meshes {
+        for ratio in [0.8, 0.9, 0.99] {
+            let plain = run(mesh, &opts(ratio, Metric::Qfvp { w: 0.0 }));
+            let guarded0 = run(mesh, &SimplifyOptions { guard: 1.0, ..opts(ratio, Metric::Qfvp { w: 0.0 }) });
+            let mut errors = vec![guarded0.0];
+            errors.extend(
+                W_VALUES[1..]
+                    .iter()
+                    .map(|&w| measure_once(mesh, &SimplifyOptions { guard: 1.0, ..opts(ratio, Metric::Qfvp { w }) })),
+            );
+            let best = (0..errors.len()).min_by(|&i, &j| errors[i].total_cmp(&errors[j])).expect("five");
+            cases += 1;
+            lower += (guarded0.0 < plain.0) as usize;
+            let cells: Vec<String> = errors.iter().map(|e| format!("{e:.6}")).collect();
+            println!(
+                "| {name} | {:.0}% | {:.6} | {} | {} | {:.1} | {:.1} | {:.1} |",
+                ratio * 100.0,
+                plain.0,
+                cells.join(" | "),
+                W_VALUES[best],
+                plain.1 * 1e3,
+                guarded0.1 * 1e3,
+                guarded0.1 / plain.1
+            );
+        }
+    }
+    println!("\nAt w = 0 the guard gives the lower error in {lower} of {cases} (mesh, reduction) cases.\n");
+
+    println!("### The weight, at w = 0\n");
+    println!("| mesh | reduction | 0 | 0.1 | 0.3 | 1 | 3 | 10 |");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|");
+    let weights = [0.0, 0.1, 0.3, 1.0, 3.0, 10.0];
+    let mut wins = [0usize; 6];
+    for (name, mesh) in meshes {
+        for ratio in [0.8, 0.9, 0.99] {
+            let e: Vec<f64> = weights
+                .iter()
+                .map(|&guard| measure_once(mesh, &SimplifyOptions { guard, ..opts(ratio, Metric::Qfvp { w: 0.0 }) }))
+                .collect();
+            wins[(0..e.len()).min_by(|&i, &j| e[i].total_cmp(&e[j])).expect("six")] += 1;
+            let cells: Vec<String> = e.iter().map(|x| format!("{x:.6}")).collect();
+            println!("| {name} | {:.0}% | {} |", ratio * 100.0, cells.join(" | "));
+        }
+    }
+    let tally: Vec<String> = weights.iter().zip(wins).map(|(w, n)| format!("{w}: {n}")).collect();
+    println!("\nLowest error per case, by weight: {}.\n", tally.join(", "));
+
+    const COPIES: u64 = 8;
+    println!("### Spread on one-ulp copies (guard 1, w = 0; as the sensitivity table above)\n");
+    println!("| mesh | reduction | unmoved | min | median | max |");
+    println!("|---|---:|---:|---:|---:|---:|");
+    for (name, mesh) in meshes.iter().filter(|(n, _)| *n == "cow" || *n == "stanford-bunny") {
+        for ratio in [0.8, 0.9] {
+            let options = SimplifyOptions { guard: 1.0, ..opts(ratio, Metric::Qfvp { w: 0.0 }) };
+            let measure = |m: &Mesh| {
+                let out = simplify(m, &options).expect("simplifies");
+                hausdorff(mesh, &out.mesh, &HausdorffOptions::default()).expect("measures").hausdorff
+            };
+            let unmoved = measure(mesh);
+            let mut spread: Vec<f64> = (0..COPIES).map(|seed| measure(&nudged(mesh, seed + 1))).collect();
+            spread.sort_by(f64::total_cmp);
+            println!(
+                "| {name} | {:.0}% | {unmoved:.6} | {:.6} | {:.6} | {:.6} |",
+                ratio * 100.0,
+                spread[0],
+                (spread[COPIES as usize / 2 - 1] + spread[COPIES as usize / 2]) / 2.0,
+                spread[COPIES as usize - 1]
+            );
+        }
+    }
+    println!();
 }
 
 /// A copy of `mesh` with every non-zero coordinate moved by one unit in the last place, up or down

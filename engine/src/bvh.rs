@@ -12,10 +12,13 @@ use crate::mesh::Mesh;
 
 const LEAF_SIZE: usize = 4;
 
+/// Boxes and corners are kept in `f32`, as the mesh stores its positions: every value is one of
+/// those positions' coordinates (or their min or max), so widening to `f64` at use gives exactly
+/// the numbers an `f64` copy would hold, in half the memory.
 #[derive(Debug, Clone, Copy)]
 struct Node {
-    min: DVec3,
-    max: DVec3,
+    min: [f32; 3],
+    max: [f32; 3],
     /// Leaf: first triangle slot; inner: index of the right child (left child is `self + 1`).
     start_or_right: u32,
     /// Leaf: number of triangles; inner: 0.
@@ -26,8 +29,8 @@ struct Node {
 #[derive(Debug, Clone)]
 pub struct TriangleBvh {
     nodes: Vec<Node>,
-    /// Triangle corners in leaf order, widened to f64.
-    corners: Vec<[DVec3; 3]>,
+    /// Triangle corners in leaf order.
+    corners: Vec<[[f32; 3]; 3]>,
     /// Original face index of each slot.
     faces: Vec<u32>,
 }
@@ -77,26 +80,29 @@ impl TriangleBvh {
     }
 
     fn build(&mut self, mesh: &Mesh, items: &mut [(DVec3, u32)]) -> u32 {
-        let mut min = DVec3::splat(f64::INFINITY);
-        let mut max = DVec3::splat(f64::NEG_INFINITY);
+        let mut min = [f32::INFINITY; 3];
+        let mut max = [f32::NEG_INFINITY; 3];
         for &(_, f) in items.iter() {
-            for p in mesh.triangle_points(f as usize) {
-                min = min.min(p);
-                max = max.max(p);
+            for v in mesh.triangles[f as usize] {
+                let p = mesh.positions[v as usize];
+                for k in 0..3 {
+                    min[k] = min[k].min(p[k]);
+                    max[k] = max[k].max(p[k]);
+                }
             }
         }
         let index = self.nodes.len() as u32;
         if items.len() <= LEAF_SIZE {
             let start = self.corners.len() as u32;
             for &(_, f) in items.iter() {
-                self.corners.push(mesh.triangle_points(f as usize));
+                self.corners.push(mesh.triangles[f as usize].map(|v| mesh.positions[v as usize]));
                 self.faces.push(f);
             }
             self.nodes.push(Node { min, max, start_or_right: start, count: items.len() as u32 });
             return index;
         }
         self.nodes.push(Node { min, max, start_or_right: 0, count: 0 });
-        let axis = (max - min).max_position();
+        let axis = (widen(max) - widen(min)).max_position();
         let mid = items.len() / 2;
         items.select_nth_unstable_by(mid, |a, b| a.0[axis].total_cmp(&b.0[axis]));
         let (left, right) = items.split_at_mut(mid);
@@ -120,7 +126,9 @@ impl TriangleBvh {
     #[inline]
     pub fn slot_distance_squared(&self, query: DVec3, slot: u32) -> f64 {
         match self.corners.get(slot as usize) {
-            Some(&[a, b, c]) => (closest_point_on_triangle(query, a, b, c) - query).length_squared(),
+            Some(&[a, b, c]) => {
+                (closest_point_on_triangle(query, widen(a), widen(b), widen(c)) - query).length_squared()
+            }
             None => f64::INFINITY,
         }
     }
@@ -142,7 +150,7 @@ impl TriangleBvh {
     pub fn closest_point(&self, query: DVec3, hint: Option<u32>) -> ClosestPoint {
         let mut best = ClosestPoint { distance_squared: f64::INFINITY, point: DVec3::ZERO, slot: 0 };
         if let Some(slot) = hint.filter(|&s| (s as usize) < self.corners.len()) {
-            let [a, b, c] = self.corners[slot as usize];
+            let [a, b, c] = self.corners[slot as usize].map(widen);
             let p = closest_point_on_triangle(query, a, b, c);
             best = ClosestPoint { distance_squared: (p - query).length_squared(), point: p, slot };
         }
@@ -157,7 +165,7 @@ impl TriangleBvh {
             if node.count > 0 {
                 let start = node.start_or_right as usize;
                 for slot in start..start + node.count as usize {
-                    let [a, b, c] = self.corners[slot];
+                    let [a, b, c] = self.corners[slot].map(widen);
                     let p = closest_point_on_triangle(query, a, b, c);
                     let d = (p - query).length_squared();
                     if d < best.distance_squared {
@@ -188,7 +196,13 @@ impl TriangleBvh {
 }
 
 #[inline]
-fn box_distance_squared(p: DVec3, min: DVec3, max: DVec3) -> f64 {
+fn widen(p: [f32; 3]) -> DVec3 {
+    DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+}
+
+#[inline]
+fn box_distance_squared(p: DVec3, min: [f32; 3], max: [f32; 3]) -> f64 {
+    let (min, max) = (widen(min), widen(max));
     let d = (min - p).max(p - max).max(DVec3::ZERO);
     d.length_squared()
 }

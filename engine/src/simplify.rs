@@ -34,9 +34,9 @@
 //! position and the new faces' centroids to the input surface ([`DistanceGuard`]). The term only
 //! adds, so entries are queued without it and measured when they reach the top: one that is no
 //! longer the cheapest goes back with its measured key (a lazy queue: the greedy order of the
-//! guarded costs, measuring ~3 candidates per collapse instead of ~12). About 10–25× the time of
-//! a run without it; on the shared meshes at weight 1 the lowest Hausdorff distance in 24 of 33
-//! (mesh, reduction) cases (docs/simplify-report.md).
+//! guarded costs, measuring ~3 candidates per collapse instead of ~12). About 20× the time of
+//! a run without it; on the shared meshes at weight 1 and w = 0, a lower Hausdorff distance than
+//! without it in 24 of 33 (mesh, reduction) cases (docs/simplify-report.md, Table 1b).
 //!
 //! ## Legality of a collapse (a, b) → a at position p, checked in this order
 //! ```text
@@ -175,8 +175,8 @@ pub struct SimplifyOptions {
     /// setting). With it, each QEM/QFVP collapse cost also pays `guard · A · d²` before the normal
     /// factor: A the surface area behind the merged quadric, d a measured distance between the
     /// collapse's new fan and the input surface, both ways (see [`DistanceGuard`]). It covers
-    /// quadric error's blind spot, a thin tip shortened along its own faces, at about ten times
-    /// the time and ~100 more bytes per input triangle; not with Melax.
+    /// quadric error's blind spot, a thin tip shortened along its own faces, at about 20× the
+    /// time and ~75 more bytes of peak memory per input triangle; not with Melax.
     pub guard: f64,
     /// Set to `true` by another thread to stop the work; the call then returns
     /// [`MeshError::Cancelled`].
@@ -559,8 +559,8 @@ pub(crate) const WITNESSES: usize = 8;
 /// otherwise a closest-point tree over the input, seeded with the walk's face, gives the exact
 /// distance. The charge is therefore exact, and most probes never reach the tree.
 ///
-/// Bounded work per candidate whatever the reduction. Memory: the tree and the face adjacency
-/// (about 125 bytes per input triangle) and 48 bytes per input vertex.
+/// Bounded work per candidate whatever the reduction. Memory: the tree (56 bytes per input
+/// triangle) and the face adjacency (12), and 48 bytes per input vertex.
 pub(crate) struct DistanceGuard {
     origin: Vec<[f32; 3]>,
     witnesses: Vec<[u32; WITNESSES]>,
@@ -587,22 +587,17 @@ impl DistanceGuard {
                 w
             })
             .collect();
-        // Each edge as (low, high, 3·face + corner), sorted: a manifold interior edge is a run of two.
-        let mut edges: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * mesh.face_count());
+        // The face across edge (u → v) of a face is the one at u whose corner comes back from v
+        // (prev = v); found in u's fan, which holds the input's faces at this point. Left NONE
+        // where the edge has no such face or more than one (boundary, non-manifold).
+        let mut across = vec![[NONE; 3]; bvh.len()];
         for (f, t) in mesh.triangles.iter().enumerate() {
+            let Some(&slot) = slots.get(f).filter(|&&s| s != NONE) else { continue };
             for i in 0..3 {
                 let (u, v) = (t[i], t[(i + 1) % 3]);
-                edges.push((u.min(v), u.max(v), 3 * f as u32 + i as u32));
-            }
-        }
-        edges.sort_unstable();
-        let mut across = vec![[NONE; 3]; bvh.len()];
-        for run in edges.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
-            if let [(_, _, e), (_, _, g)] = *run {
-                let (se, sg) = (slots[(e / 3) as usize], slots[(g / 3) as usize]);
-                if se != NONE && sg != NONE {
-                    across[se as usize][(e % 3) as usize] = sg;
-                    across[sg as usize][(g % 3) as usize] = se;
+                let mut back = fans[u as usize].iter().filter(|c| c.prev == v);
+                if let (Some(c), None) = (back.next(), back.next()) {
+                    across[slot as usize][i] = slots[c.face as usize];
                 }
             }
         }
@@ -1823,6 +1818,8 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
         }
     };
 
+    // The guard's tree and tables are done with: their memory goes back before the outputs'.
+    state.guard = None;
     state.rebuild_triangles(&log);
     let simplified = state.output_mesh();
     let progressive = options.record_progressive.then(|| {
