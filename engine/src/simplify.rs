@@ -615,19 +615,26 @@ impl DistanceGuard {
     }
 
     /// The walk's nearest input face to `q` from the nearest of `starts` (NONE entries skipped):
-    /// (squared distance, slot); (∞, NONE) without a start.
-    fn nearest_face(&self, q: DVec3, starts: &[u32]) -> (f64, u32) {
+    /// (squared distance, slot); (∞, NONE) without a start. Stops as soon as a face is within
+    /// `enough` (squared): the caller only needs to know that.
+    fn nearest_face(&self, q: DVec3, starts: &[u32], enough: f64) -> (f64, u32) {
         let mut best = (f64::INFINITY, NONE);
         for &f in starts.iter().filter(|&&f| f != NONE) {
             let d = self.bvh.slot_distance_squared(q, f);
             if d < best.0 {
                 best = (d, f);
+                if d <= enough {
+                    return best;
+                }
             }
         }
         if best.1 == NONE {
             return best;
         }
         for _ in 0..WALK_STEPS {
+            if best.0 <= enough {
+                break;
+            }
             let mut step = best;
             for &g in self.across[best.1 as usize].iter().filter(|&&g| g != NONE) {
                 let d = self.bvh.slot_distance_squared(q, g);
@@ -741,17 +748,33 @@ impl<'o> State<'o> {
                 }
             }
         }
+        // Only the maximum matters: a witness with a face within `worst` cannot raise it, so its
+        // search stops there, starting from the face that was nearest to the witness before.
+        let mut worst: f64 = 0.0;
+        let mut start = 0;
         let witnesses = guard.witnesses[a as usize].iter().chain(&guard.witnesses[b as usize]);
-        let mut worst = witnesses
-            .filter(|&&w| w != NONE)
-            .map(|&w| fan_distance2(to_f64(guard.origin[w as usize]), p, &far_edges))
-            .fold(0.0, f64::max);
+        for &w in witnesses.filter(|&&w| w != NONE) {
+            let q = to_f64(guard.origin[w as usize]);
+            let mut nearest = (f64::INFINITY, start);
+            for k in (start..far_edges.len()).chain(0..start) {
+                let (x, y) = far_edges[k];
+                let d = (crate::bvh::closest_point_on_triangle(q, p, x, y) - q).length_squared();
+                if d < nearest.0 {
+                    nearest = (d, k);
+                    if d <= worst {
+                        break;
+                    }
+                }
+            }
+            worst = worst.max(nearest.0);
+            start = nearest.1;
+        }
         let (ha, hb) = (guard.hint[a as usize], guard.hint[b as usize]);
-        let (d, near_p) = guard.nearest_face(p, &[ha, hb]);
+        let (d, near_p) = guard.nearest_face(p, &[ha, hb], worst);
         worst = worst.max(guard.exact(p, d, near_p, worst));
         for (&(px, py), &[hx, hy]) in far_edges.iter().zip(&far_hints) {
             let q = (p + px + py) / 3.0;
-            let (d, f) = guard.nearest_face(q, &[near_p, hx, hy]);
+            let (d, f) = guard.nearest_face(q, &[near_p, hx, hy], worst);
             worst = worst.max(guard.exact(q, d, f, worst));
         }
         worst
@@ -779,7 +802,7 @@ impl<'o> State<'o> {
         guard.witnesses[a as usize] = kept;
         guard.witnesses[b as usize] = [NONE; WITNESSES];
         let (ha, hb) = (guard.hint[a as usize], guard.hint[b as usize]);
-        guard.hint[a as usize] = guard.nearest_face(p, &[ha, hb]).1;
+        guard.hint[a as usize] = guard.nearest_face(p, &[ha, hb], 0.0).1;
         guard.hint[b as usize] = NONE;
         self.guard = Some(guard);
     }
@@ -1723,7 +1746,9 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     // The edges come sorted by their lower end, so the higher end's block is the one not in cache:
     // those of the next chunk are asked for while this one is ranked.
     const CHUNK: usize = 16;
-    let mut entries = Vec::with_capacity(edges.len());
+    // Room for the queue's growth to its sweep bound (2 entries per face, below) from the start:
+    // growing it later copies every entry into freshly faulted pages.
+    let mut entries = Vec::with_capacity(edges.len().max(2 * faces_in + 16));
     for (i, chunk) in edges.chunks(CHUNK).enumerate() {
         let ahead = edges.get((i + 1) * CHUNK..((i + 2) * CHUNK).min(edges.len())).unwrap_or_default();
         ahead.iter().for_each(|e| state.vertices[e[1] as usize].prefetch());
@@ -1733,7 +1758,8 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     drop(edges);
 
     let mut faces_alive = faces_in;
-    let mut log: Vec<CollapseRecord> = Vec::new();
+    // A collapse removes two faces (one on a boundary): sized for the usual case up front.
+    let mut log: Vec<CollapseRecord> = Vec::with_capacity((faces_in - target.min(faces_in)) / 2 + 16);
     let mut neighbours = Vec::new();
     let mut rejected = 0;
     let mut pops = 0usize;
