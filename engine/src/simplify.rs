@@ -34,7 +34,7 @@
 //! position and the new faces' centroids to the input surface ([`DistanceGuard`]). The term only
 //! adds, so entries are queued without it and measured when they reach the top: one that is no
 //! longer the cheapest goes back with its measured key (a lazy queue: the greedy order of the
-//! guarded costs, measuring ~3 candidates per collapse instead of ~12). About 20× the time of
+//! guarded costs, measuring ~3 candidates per collapse instead of ~12). About 12× the time of
 //! a run without it; on the shared meshes at weight 1 and w = 0, a lower Hausdorff distance than
 //! without it in 24 of 33 (mesh, reduction) cases (docs/simplify-report.md, Table 1b).
 //!
@@ -175,7 +175,7 @@ pub struct SimplifyOptions {
     /// setting). With it, each QEM/QFVP collapse cost also pays `guard · A · d²` before the normal
     /// factor: A the surface area behind the merged quadric, d a measured distance between the
     /// collapse's new fan and the input surface, both ways (see [`DistanceGuard`]). It covers
-    /// quadric error's blind spot, a thin tip shortened along its own faces, at about 20× the
+    /// quadric error's blind spot, a thin tip shortened along its own faces, at about 12× the
     /// time and ~75 more bytes of peak memory per input triangle; not with Melax.
     pub guard: f64,
     /// Set to `true` by another thread to stop the work; the call then returns

@@ -174,7 +174,7 @@ pub(crate) struct SimplifyArgs {
     pub(crate) max_normal_change: f64,
     /// Distance guard: each collapse also pays for the distance it opens between the result and
     /// the input, measured both ways. Lower Hausdorff distance on most meshes (a thin tip is no
-    /// longer shortened for free) at about 20× the time. `--guard` alone is weight 1; 0 is off.
+    /// longer shortened for free) at about 12× the time. `--guard` alone is weight 1; 0 is off.
     #[arg(long, value_name = "WEIGHT", num_args = 0..=1, default_missing_value = "1", default_value_t = 0.0)]
     pub(crate) guard: f64,
     /// Also write the progressive mesh (base + vertex splits) to this .pm file.
