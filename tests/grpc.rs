@@ -106,6 +106,8 @@ async fn every_rpc_over_loopback() {
     let mut request = simplify_request(&mesh, 0.9);
     request.options.as_mut().unwrap().guard = Some(1.0);
     let guarded = client.simplify(request).await.unwrap().into_inner();
+    assert_eq!(guarded.stats.as_ref().unwrap().guard, 1.0);
+    assert_eq!(stats.guard, 0.0);
     let guarded = mesh_from_proto(guarded.mesh.as_ref().unwrap(), "mesh", &MeshLimits::default()).unwrap();
     let local =
         simplify(&mesh, &SimplifyOptions { target_ratio: Some(0.9), guard: 1.0, ..Default::default() }).unwrap();

@@ -250,6 +250,7 @@ pub(crate) async fn remote_simplify(
     let stats = response.stats.unwrap_or_default();
     let mut report = json!({
         "faces_in": stats.faces_in, "faces_out": stats.faces_out, "metric": stats.metric, "w": stats.w,
+        "guard": stats.guard,
         "seconds": stats.seconds, "stop_reason": stats.stop_reason, "collapses": stats.collapses,
     });
     if let Some(h) = response.hausdorff {

@@ -279,6 +279,7 @@ fn run_simplify(
         max_collapse_error: s.max_collapse_error,
         seconds: s.seconds,
         w_candidates,
+        guard: options.guard,
     };
     Ok((result, stats, hausdorff, mesh))
 }
