@@ -209,27 +209,13 @@ fn guard_tables(meshes: &[(&str, Mesh)]) {
     let tally: Vec<String> = weights.iter().zip(wins).map(|(w, n)| format!("{w}: {n}")).collect();
     println!("\nLowest error per case, by weight: {}.\n", tally.join(", "));
 
-    const COPIES: u64 = 8;
     println!("### Spread on one-ulp copies (guard 1, w = 0; as the sensitivity table above)\n");
     println!("| mesh | reduction | unmoved | min | median | max |");
     println!("|---|---:|---:|---:|---:|---:|");
     for (name, mesh) in meshes.iter().filter(|(n, _)| *n == "cow" || *n == "stanford-bunny") {
         for ratio in [0.8, 0.9] {
-            let options = SimplifyOptions { guard: 1.0, ..opts(ratio, Metric::Qfvp { w: 0.0 }) };
-            let measure = |m: &Mesh| {
-                let out = simplify(m, &options).expect("simplifies");
-                hausdorff(mesh, &out.mesh, &HausdorffOptions::default()).expect("measures").hausdorff
-            };
-            let unmoved = measure(mesh);
-            let mut spread: Vec<f64> = (0..COPIES).map(|seed| measure(&nudged(mesh, seed + 1))).collect();
-            spread.sort_by(f64::total_cmp);
-            println!(
-                "| {name} | {:.0}% | {unmoved:.6} | {:.6} | {:.6} | {:.6} |",
-                ratio * 100.0,
-                spread[0],
-                (spread[COPIES as usize / 2 - 1] + spread[COPIES as usize / 2]) / 2.0,
-                spread[COPIES as usize - 1]
-            );
+            let cells = spread(mesh, &SimplifyOptions { guard: 1.0, ..opts(ratio, Metric::Qfvp { w: 0.0 }) });
+            println!("| {name} | {:.0}% | {cells} |", ratio * 100.0);
         }
     }
     println!();
@@ -254,7 +240,6 @@ fn nudged(mesh: &Mesh, seed: u64) -> Mesh {
 /// How far the paper-comparison figures move when the input moves by one ulp: the spread is the
 /// resolution at which two simplifiers (or two w) can be told apart by max Hausdorff.
 fn sensitivity(meshes: &[(&str, Mesh)]) {
-    const COPIES: u64 = 8;
     println!("## Sensitivity — the same figures on one-ulp copies of the input\n");
     println!("Each input coordinate moved by one unit in the last place (up or down at random), {COPIES} copies;");
     println!("Hausdorff measured against the unmoved original. min / median / max over the copies.\n");
@@ -263,23 +248,27 @@ fn sensitivity(meshes: &[(&str, Mesh)]) {
     for (name, mesh) in meshes.iter().filter(|(n, _)| *n == "cow" || *n == "stanford-bunny") {
         for ratio in [0.8, 0.9] {
             for w in [0.0, 0.5, 1.0] {
-                let options = opts(ratio, Metric::Qfvp { w });
-                let measure = |m: &Mesh| {
-                    let out = simplify(m, &options).expect("simplifies");
-                    hausdorff(mesh, &out.mesh, &HausdorffOptions::default()).expect("measures").hausdorff
-                };
-                let unmoved = measure(mesh);
-                let mut spread: Vec<f64> = (0..COPIES).map(|seed| measure(&nudged(mesh, seed + 1))).collect();
-                spread.sort_by(f64::total_cmp);
-                println!(
-                    "| {name} | {:.0}% | {w} | {unmoved:.6} | {:.6} | {:.6} | {:.6} |",
-                    ratio * 100.0,
-                    spread[0],
-                    (spread[COPIES as usize / 2 - 1] + spread[COPIES as usize / 2]) / 2.0,
-                    spread[COPIES as usize - 1]
-                );
+                let cells = spread(mesh, &opts(ratio, Metric::Qfvp { w }));
+                println!("| {name} | {:.0}% | {w} | {cells} |", ratio * 100.0);
             }
         }
     }
     println!();
+}
+
+/// One-ulp copies of the input per spread measurement.
+const COPIES: u64 = 8;
+
+/// The error of `options` on `mesh` and its min / median / max over [`COPIES`] one-ulp copies,
+/// as table cells.
+fn spread(mesh: &Mesh, options: &SimplifyOptions) -> String {
+    let measure = |m: &Mesh| {
+        let out = simplify(m, options).expect("simplifies");
+        hausdorff(mesh, &out.mesh, &HausdorffOptions::default()).expect("measures").hausdorff
+    };
+    let unmoved = measure(mesh);
+    let mut copies: Vec<f64> = (0..COPIES).map(|seed| measure(&nudged(mesh, seed + 1))).collect();
+    copies.sort_by(f64::total_cmp);
+    let n = COPIES as usize;
+    format!("{unmoved:.6} | {:.6} | {:.6} | {:.6}", copies[0], (copies[n / 2 - 1] + copies[n / 2]) / 2.0, copies[n - 1])
 }

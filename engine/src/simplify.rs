@@ -727,10 +727,7 @@ impl<'o> State<'o> {
         let (va, vb) = (&self.vertices[a as usize], &self.vertices[b as usize]);
         let area = va.quadric.weight + vb.quadric.weight;
         let d2 = self.guard_distance2(guard, a, b, choice.position);
-        let factor = match self.options.metric.w() {
-            Some(w) if w > 0.0 => (1.0 - va.normal.dot(vb.normal).clamp(-1.0, 1.0)).powf(w),
-            _ => 1.0,
-        };
+        let factor = self.normal_factor(va, vb);
         Some(order_key((choice.error + self.options.guard * area * d2) * factor, choice.error))
     }
 
@@ -807,6 +804,23 @@ impl<'o> State<'o> {
         self.guard = Some(guard);
     }
 
+    /// QFVP's normal term `(1 − cos θ)^w` of an edge with these endpoints (1 for QEM and w = 0).
+    #[inline]
+    fn normal_factor(&self, va: &VertexData, vb: &VertexData) -> f64 {
+        let w = self.options.metric.w().unwrap_or(0.0);
+        if w == 0.0 {
+            return 1.0;
+        }
+        let x = 1.0 - va.normal.dot(vb.normal).clamp(-1.0, 1.0);
+        match w {
+            0.5 => x.sqrt(),
+            1.0 => x,
+            1.5 => x * x.sqrt(),
+            2.0 => x * x,
+            _ => x.powf(w),
+        }
+    }
+
     /// The metric's preferred collapse of edge {a, b} as cost, error and position, the survivor
     /// left open where either endpoint may move: the queue key needs no more, so queueing an edge
     /// never reads the fans.
@@ -851,20 +865,7 @@ impl<'o> State<'o> {
             Metric::Qem | Metric::Qfvp { .. } => {
                 // The normal term depends on the edge only, not on where the merged vertex goes,
                 // so every placement of this edge is ranked by its quadric error alone.
-                let w = self.options.metric.w().unwrap_or(0.0);
-                let factor = if w == 0.0 {
-                    1.0
-                } else {
-                    let cos = va.normal.dot(vb.normal).clamp(-1.0, 1.0);
-                    let x = 1.0 - cos;
-                    match w {
-                        0.5 => x.sqrt(),
-                        1.0 => x,
-                        1.5 => x * x.sqrt(),
-                        2.0 => x * x,
-                        _ => x.powf(w),
-                    }
-                };
+                let factor = self.normal_factor(va, vb);
                 let mover = match (may_keep_a, may_keep_b) {
                     (true, false) => Keep::A,
                     (false, true) => Keep::B,

@@ -123,6 +123,22 @@ fn boundary_pieces(mesh: &Mesh) -> usize {
     roots.len()
 }
 
+/// A mesh's faces as sorted corner positions, sorted: equal for the same faces whatever the
+/// vertex numbering and corner rotation.
+fn face_key(m: &Mesh) -> Vec<[[u32; 3]; 3]> {
+    let mut faces: Vec<[[u32; 3]; 3]> = m
+        .triangles
+        .iter()
+        .map(|t| {
+            let mut c = t.map(|v| m.positions[v as usize].map(f32::to_bits));
+            c.sort_unstable();
+            c
+        })
+        .collect();
+    faces.sort_unstable();
+    faces
+}
+
 fn shared(name: &str) -> Option<Mesh> {
     let dir = meshlod_engine::datasets::require_shared_meshes(name)?;
     Some(read_mesh(dir.join(format!("{name}.obj"))).unwrap())
@@ -174,21 +190,8 @@ fn at_faces_equals_simplifying_straight_to_that_count() {
                 .unwrap()
                 .mesh;
         let level = pm.at_faces(target);
-        let key = |m: &Mesh| {
-            let mut faces: Vec<[[u32; 3]; 3]> = m
-                .triangles
-                .iter()
-                .map(|t| {
-                    let mut c = t.map(|v| m.positions[v as usize].map(f32::to_bits));
-                    c.sort_unstable();
-                    c
-                })
-                .collect();
-            faces.sort_unstable();
-            faces
-        };
         assert_eq!(level.face_count(), straight.face_count(), "target {target}");
-        assert_eq!(key(&level), key(&straight), "target {target}: different faces");
+        assert_eq!(face_key(&level), face_key(&straight), "target {target}: different faces");
     }
     // Incremental moves between levels give the same meshes as fresh rebuilds.
     let mut cursor = pm.cursor();
@@ -428,20 +431,7 @@ fn distance_guard_levels_equal_straight_runs_and_bad_weights_are_refused() {
         let straight = simplify(&mesh, &guarded(0.0, Some(target))).unwrap().mesh;
         let level = pm.at_faces(target);
         assert_eq!(level.face_count(), straight.face_count(), "target {target}");
-        let key = |m: &Mesh| {
-            let mut faces: Vec<[[u32; 3]; 3]> = m
-                .triangles
-                .iter()
-                .map(|t| {
-                    let mut c = t.map(|v| m.positions[v as usize].map(f32::to_bits));
-                    c.sort_unstable();
-                    c
-                })
-                .collect();
-            faces.sort_unstable();
-            faces
-        };
-        assert_eq!(key(&level), key(&straight), "target {target}: different faces");
+        assert_eq!(face_key(&level), face_key(&straight), "target {target}: different faces");
     }
     for (guard, metric) in
         [(f64::NAN, Metric::Qem), (-1.0, Metric::Qem), (f64::INFINITY, Metric::Qem), (1.0, Metric::Melax)]
