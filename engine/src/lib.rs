@@ -8,6 +8,7 @@
 pub mod bvh;
 pub mod datasets;
 pub mod error;
+mod fan;
 pub mod features;
 pub mod hausdorff;
 pub mod io;

@@ -124,41 +124,67 @@ impl CollapseQueue {
     /// With `PREFETCH`, asks for the next level's lines while comparing the current one: a pop
     /// walks from the root to a random leaf; heapifying walks the array backwards, which the
     /// hardware prefetcher follows by itself.
+    ///
+    /// A node with all four children (every node above the last level but one) takes the path
+    /// with fixed bounds: one range check for the four, none per child.
     fn sift_down<const PREFETCH: bool>(&mut self, mut i: usize) {
-        let n = self.entries.len();
-        let entry = self.entries[i];
+        let entries = &mut self.entries[..];
+        let n = entries.len();
+        let entry = entries[i];
         let rank = entry.rank();
         loop {
             let first = ARITY * i + 1;
-            if first >= n {
-                break;
-            }
-            let end = (first + ARITY).min(n);
-            // The next level is one of four groups below these children: asking for all four
-            // while these are compared hides most of the wait for the one that is taken.
-            if PREFETCH {
-                for c in first..end {
-                    if let Some(grandchild) = self.entries.get(ARITY * c + 1) {
-                        prefetch(grandchild);
+            let (best, best_rank) = if let Some(children) = entries.get(first..first + ARITY) {
+                // The next level is one of four groups below these children: asking for all four
+                // while these are compared hides most of the wait for the one that is taken.
+                if PREFETCH {
+                    let grandchildren = ARITY * first + 1;
+                    if let Some(last) = entries.get(grandchildren + ARITY * (ARITY - 1)) {
+                        prefetch(&entries[grandchildren]);
+                        prefetch(&entries[grandchildren + ARITY]);
+                        prefetch(&entries[grandchildren + 2 * ARITY]);
+                        prefetch(last);
+                    } else {
+                        for c in 0..ARITY {
+                            if let Some(grandchild) = entries.get(grandchildren + ARITY * c) {
+                                prefetch(grandchild);
+                            }
+                        }
                     }
                 }
-            }
-            let mut best = first;
-            let mut best_rank = self.entries[first].rank();
-            for c in first + 1..end {
-                let r = self.entries[c].rank();
-                if r < best_rank {
-                    best = c;
-                    best_rank = r;
+                let children: &[QueueEntry; ARITY] = children.try_into().expect("four children");
+                let mut best = 0;
+                let mut best_rank = children[0].rank();
+                for (c, child) in children.iter().enumerate().skip(1) {
+                    let r = child.rank();
+                    if r < best_rank {
+                        best = c;
+                        best_rank = r;
+                    }
                 }
-            }
+                (first + best, best_rank)
+            } else if first < n {
+                // The last parent: fewer than four children, none with children of its own.
+                let mut best = first;
+                let mut best_rank = entries[first].rank();
+                for (c, child) in entries.iter().enumerate().skip(first + 1) {
+                    let r = child.rank();
+                    if r < best_rank {
+                        best = c;
+                        best_rank = r;
+                    }
+                }
+                (best, best_rank)
+            } else {
+                break;
+            };
             if best_rank >= rank {
                 break;
             }
-            self.entries[i] = self.entries[best];
+            entries[i] = entries[best];
             i = best;
         }
-        self.entries[i] = entry;
+        entries[i] = entry;
     }
 }
 

@@ -74,6 +74,7 @@ use serde::Serialize;
 use smallvec::SmallVec;
 
 use crate::error::MeshError;
+use crate::fan::{Corner, FanSlot};
 use crate::hausdorff::{HausdorffOptions, HausdorffReport, hausdorff};
 use crate::mesh::{DistanceUnits, Mesh};
 use crate::pm::{CollapseRecord, ProgressiveMesh};
@@ -323,7 +324,9 @@ pub(crate) struct State<'o> {
     pub(crate) mark_stamp: u32,
     /// Scratch for the fold check: the two other corners and the new unit normal of each face.
     pub(crate) fan_scratch: Vec<([u32; 2], DVec3)>,
-    pub(crate) corner_scratch: Vec<(u32, u32)>,
+    /// Scratch for the fold check: for a ring vertex x, the index in `fan_scratch` of the face
+    /// whose far edge starts at x (valid only where that face's far edge does start at x).
+    pub(crate) spoke: Vec<u32>,
     /// The collapse (survivor, removed, position bits) that `is_legal` last accepted, whose new
     /// face normals `fan_scratch` still holds.
     pub(crate) checked: Option<(u32, u32, [u32; 3])>,
@@ -361,6 +364,19 @@ impl VertexData {
         prefetch(&self.quadric);
         prefetch(&self.position);
     }
+}
+
+/// Whether two faces of a new fan (far edge, unit normal) that share a vertex other than the
+/// merged one turn back onto each other: every pair looked at, the reference for the one-pass
+/// check in [`State::is_legal`].
+fn folds_pairwise(fan: &[([u32; 2], DVec3)]) -> bool {
+    (0..fan.len()).any(|i| {
+        (i + 1..fan.len()).any(|j| {
+            let ([a, b], ni) = fan[i];
+            let ([c, d], nj) = fan[j];
+            (a == c || a == d || b == c || b == d) && ni.dot(nj) < FOLD_DOT
+        })
+    })
 }
 
 /// Faces whose quality (`4√3·area / Σ edge²`) is below this at the start make their corners'
@@ -429,79 +445,6 @@ impl NormalCone {
 impl Default for NormalCone {
     fn default() -> Self {
         NormalCone::EMPTY
-    }
-}
-
-/// One face at a vertex `v`, read from `v` in the face's orientation: (v, next, prev). Fans carry
-/// the corners so that the hot checks (link condition, folds, neighbour rings) never look up the
-/// triangle array.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Corner {
-    pub(crate) face: u32,
-    pub(crate) next: u32,
-    pub(crate) prev: u32,
-}
-
-impl Corner {
-    /// The corner of this face that is neither the fan's vertex nor `x` (one of `next`, `prev`).
-    #[inline]
-    fn other(&self, x: u32) -> u32 {
-        if self.next == x { self.prev } else { self.next }
-    }
-
-    #[inline]
-    fn touches(&self, x: u32) -> bool {
-        self.next == x || self.prev == x
-    }
-}
-
-/// Faces around a vertex kept inline up to this count (valence 6 is typical; merged vertices
-/// reach 8–10 before their neighbours collapse in turn); larger fans spill to the heap.
-const FAN_INLINE: usize = 8;
-
-/// The faces around one vertex.
-pub(crate) type Fan = SmallVec<[Corner; FAN_INLINE]>;
-
-/// A [`Fan`] in two whole cache lines of its own: 104 bytes at a 104-byte stride straddle three
-/// lines half of the time, and a prefetch hint can only name the first and the last of them
-/// ([`FanSlot::prefetch`]). Derefs to the fan.
-#[derive(Debug, Clone, Default)]
-#[repr(C, align(64))]
-pub(crate) struct FanSlot {
-    fan: Fan,
-    /// Marks the fan's end: its address lies in the second line.
-    end: [u8; 0],
-}
-
-const _: () = assert!(std::mem::size_of::<FanSlot>() == 128);
-
-impl FanSlot {
-    /// Asks the cache for both lines of the fan.
-    #[inline]
-    pub(crate) fn prefetch(&self) {
-        prefetch(&self.fan);
-        prefetch(&self.end);
-    }
-}
-
-impl std::ops::Deref for FanSlot {
-    type Target = Fan;
-    fn deref(&self) -> &Fan {
-        &self.fan
-    }
-}
-
-impl<'a> IntoIterator for &'a FanSlot {
-    type Item = &'a Corner;
-    type IntoIter = std::slice::Iter<'a, Corner>;
-    fn into_iter(self) -> Self::IntoIter {
-        self.fan.iter()
-    }
-}
-
-impl std::ops::DerefMut for FanSlot {
-    fn deref_mut(&mut self) -> &mut Fan {
-        &mut self.fan
     }
 }
 
@@ -692,17 +635,7 @@ impl<'o> State<'o> {
 
     /// Faces on edge (a, b), as corners of `a`'s fan, and how many there are.
     fn edge_corners(&self, a: u32, b: u32) -> ([Corner; 2], usize) {
-        let mut out = [Corner { face: NONE, next: NONE, prev: NONE }; 2];
-        let mut n = 0;
-        for c in &self.fans[a as usize] {
-            if c.touches(b) {
-                if n < 2 {
-                    out[n] = *c;
-                }
-                n += 1;
-            }
-        }
-        (out, n)
+        self.fans[a as usize].touching(b)
     }
 
     /// The collapse of edge {a, b} the metric prefers, or `None` if the rules forbid every
@@ -943,19 +876,20 @@ impl<'o> State<'o> {
             self.mark[corner.next as usize] = stamp;
             self.mark[corner.prev as usize] = stamp;
         }
+        // Counted without a branch on the data (whether a neighbour of b is one of a's is as good
+        // as random): each common neighbour once, and whether any is not opposite the edge.
         let mut common = 0;
+        let mut stray = false;
         for corner in &self.fans[b as usize] {
             for v in [corner.next, corner.prev] {
-                if v != a && self.mark[v as usize] == stamp {
-                    self.mark[v as usize] = stamp.wrapping_sub(1); // count each neighbour once
-                    if !opposite.contains(&v) {
-                        return false;
-                    }
-                    common += 1;
-                }
+                let mark = &mut self.mark[v as usize];
+                let hit = (v != a) & (*mark == stamp);
+                *mark = if hit { stamp.wrapping_sub(1) } else { *mark }; // count each neighbour once
+                stray |= hit & (v != opposite[0]) & (v != opposite[1]);
+                common += hit as usize;
             }
         }
-        if common != shared_count {
+        if stray || common != shared_count {
             return false;
         }
         // The merged vertex keeps enough faces.
@@ -1002,28 +936,21 @@ impl<'o> State<'o> {
             }
         }
         // No fold: two faces of the new fan that share an edge must not turn back onto each other
-        // (a sequence of small per-face normal changes can otherwise fold a pair over). Faces that
-        // share the edge (merged vertex, x) are adjacent once the corners are sorted by x.
-        // Small fans (the usual valence) pairwise; large ones sorted, to stay O(n log n).
-        let folded = if fan.len() <= SMALL_FAN {
-            (0..fan.len()).any(|i| {
-                (i + 1..fan.len()).any(|j| {
-                    let ([a, b], ni) = fan[i];
-                    let ([c, d], nj) = fan[j];
-                    (a == c || a == d || b == c || b == d) && ni.dot(nj) < FOLD_DOT
-                })
-            })
-        } else {
-            let mut corners = std::mem::take(&mut self.corner_scratch);
-            corners.clear();
-            corners.extend(fan.iter().enumerate().flat_map(|(i, &([x, y], _))| [(x, i as u32), (y, i as u32)]));
-            corners.sort_unstable();
-            let folded = corners
-                .windows(2)
-                .any(|w| w[0].0 == w[1].0 && fan[w[0].1 as usize].1.dot(fan[w[1].1 as usize].1) < FOLD_DOT);
-            self.corner_scratch = corners;
-            folded
-        };
+        // (a sequence of small per-face normal changes can otherwise fold a pair over). The link
+        // condition holds, so the new fan is a disk (or half of one) in which the spoke (merged
+        // vertex, x) is the `x` of one face and the `y` of the next: each face finds the face it
+        // follows through `spoke`, indexed by vertex, in one pass without a data-dependent branch
+        // (checking all pairs cost a mispredicted branch per shared edge). A `spoke` entry left by
+        // an earlier check is told apart by the face it names not having that `x`.
+        for (i, &([x, _], _)) in fan.iter().enumerate() {
+            self.spoke[x as usize] = i as u32;
+        }
+        let mut folded = false;
+        for &([_, y], n) in fan.iter() {
+            let before = fan.get(self.spoke[y as usize] as usize);
+            folded |= before.is_some_and(|&([x, _], m)| (x == y) & (m.dot(n) < FOLD_DOT));
+        }
+        debug_assert_eq!(folded, folds_pairwise(&fan), "spoke pairing disagrees with the pairwise check");
         self.fan_scratch = fan;
         if folded {
             return false;
@@ -1106,18 +1033,17 @@ impl<'o> State<'o> {
             self.face_alive[f as usize] = false;
             *slot = f;
             let fan = &mut self.fans[third as usize];
-            if let Some(i) = fan.iter().position(|d| d.face == f) {
+            if let Some(i) = fan.find_face(f) {
                 fan.remove(i);
             }
         }
-        let is_dead = |d: &Corner| d.face == dead[0] || d.face == dead[1];
+        let is_dead = |d: &Corner| (d.face == dead[0]) | (d.face == dead[1]);
         self.fans[a as usize].retain(|d| !is_dead(d));
         let moved = std::mem::take(&mut self.fans[b as usize]);
         let count_a = self.fans[a as usize].len() as f64;
         // b's fan holds each face at b once, the shared faces among them.
         let count_b = moved.len() - shared_count;
         debug_assert_eq!(count_b, moved.iter().filter(|d| !is_dead(d)).count());
-        self.fans[a as usize].reserve(count_b);
         for corner in moved.iter().filter(|d| !is_dead(d)) {
             let f = corner.face;
             if self.track_triangles {
@@ -1129,13 +1055,11 @@ impl<'o> State<'o> {
             }
             // The face's corners at its two other vertices name b: they now name a.
             for x in [corner.next, corner.prev] {
-                if let Some(d) = self.fans[x as usize].iter_mut().find(|d| d.face == f) {
-                    if d.next == b {
-                        d.next = a;
-                    }
-                    if d.prev == b {
-                        d.prev = a;
-                    }
+                let fan = &mut self.fans[x as usize];
+                if let Some(d) = fan.find_face(f).map(|i| &mut fan[i]) {
+                    // One of the two names b: which one is as good as random, so no branch.
+                    d.next = if d.next == b { a } else { d.next };
+                    d.prev = if d.prev == b { a } else { d.prev };
                 }
             }
             self.fans[a as usize].push(*corner);
@@ -1242,16 +1166,22 @@ impl<'o> State<'o> {
 
     fn push_edges_of(&mut self, v: u32, heap: &mut CollapseQueue, neighbours: &mut Vec<u32>) {
         // Unique neighbours by mark stamps (no sort: the heap's total order makes push order moot).
+        // Written unconditionally and kept by advancing the count: whether a corner's vertex was
+        // seen already is as good as random (each is seen twice around an interior vertex).
         let stamp = self.next_stamp();
+        let fan = &self.fans[v as usize];
         neighbours.clear();
-        for c in &self.fans[v as usize] {
+        neighbours.resize(2 * fan.len(), NONE);
+        let mut count = 0;
+        for c in fan {
             for u in [c.next, c.prev] {
-                if self.mark[u as usize] != stamp {
-                    self.mark[u as usize] = stamp;
-                    neighbours.push(u);
-                }
+                let mark = &mut self.mark[u as usize];
+                neighbours[count] = u;
+                count += (*mark != stamp) as usize;
+                *mark = stamp;
             }
         }
+        neighbours.truncate(count);
         for &u in neighbours.iter() {
             self.push_edge(v, u, heap);
         }
@@ -1314,7 +1244,7 @@ impl<'o> State<'o> {
             mark: vec![0; vertex_count],
             mark_stamp: 0,
             fan_scratch: Vec::new(),
-            corner_scratch: Vec::new(),
+            spoke: vec![0; vertex_count],
             checked: None,
             cos_max_normal_change: options.max_normal_change_degrees.to_radians().cos(),
             guard: None,
