@@ -74,6 +74,12 @@ impl FanSlot {
         prefetch(&self.spill);
     }
 
+    /// All inline slots (the live corners first, then padding), when the fan is inline.
+    #[inline]
+    pub(crate) fn inline_slots(&self) -> Option<&[Corner; FAN_INLINE]> {
+        self.is_inline().then_some(&self.inline)
+    }
+
     #[inline]
     fn is_inline(&self) -> bool {
         self.len as usize <= FAN_INLINE

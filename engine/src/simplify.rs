@@ -74,7 +74,7 @@ use serde::Serialize;
 use smallvec::SmallVec;
 
 use crate::error::MeshError;
-use crate::fan::{Corner, FanSlot};
+use crate::fan::{Corner, FAN_INLINE, FanSlot};
 use crate::hausdorff::{HausdorffOptions, HausdorffReport, hausdorff};
 use crate::mesh::{DistanceUnits, Mesh};
 use crate::pm::{CollapseRecord, ProgressiveMesh};
@@ -1445,13 +1445,107 @@ fn scan_fans(fans: &[FanSlot]) -> Scan {
     let mut scratch = LargeFanScratch::default();
     for (v, fan) in fans.iter().enumerate() {
         let v = v as u32;
-        let kind = match fan.len() {
-            0..=SMALL_FAN => scan_small_fan(v, fan, &mut scan),
-            _ => scan_large_fan(v, fan, &mut scan, &mut scratch),
+        let closed = fan.inline_slots().and_then(|slots| scan_closed_fan(v, slots, fan.len(), &mut scan));
+        let kind = match (closed, fan.len()) {
+            (Some(kind), _) => kind,
+            (None, 0..=SMALL_FAN) => scan_small_fan(v, fan, &mut scan),
+            (None, _) => scan_large_fan(v, fan, &mut scan, &mut scratch),
         };
         scan.kind.push(kind);
     }
     scan
+}
+
+/// [`scan_fans`] for the usual vertex: an inline fan (the slots past `n` padded with
+/// [`Corner::NONE`]) whose faces close around it, each `next` neighbour being exactly one face's
+/// `prev`. Then the only question is whether the faces form one cycle or several (two cones
+/// touching at the vertex), and the neighbours are the `next` corners. `None` when the fan is not
+/// closed in this way (a boundary, a non-manifold edge): [`scan_small_fan`] sorts those out.
+///
+/// Every slot is compared with every other (fixed bounds, no branch on the data): on
+/// stanford-bunny this takes about a quarter of the instructions of the general count.
+fn scan_closed_fan(v: u32, slots: &[Corner; FAN_INLINE], n: usize, scan: &mut Scan) -> Option<VertexKind> {
+    const N: usize = FAN_INLINE;
+    if n < 2 {
+        return None;
+    }
+    let live = (1u32 << n) - 1;
+    let next = slots.map(|c| c.next);
+    let prev = slots.map(|c| c.prev);
+    // after[i]: the face whose `prev` is face i's `next` (the face that follows i around v).
+    let mut after = [0u8; N];
+    let mut closed = true;
+    let mut followed = 0u32;
+    for i in 0..N {
+        let mut followers = 0u32;
+        for (j, &p) in prev.iter().enumerate() {
+            followers |= ((p == next[i]) as u32) << j;
+        }
+        followers &= live;
+        let exactly_one = (followers != 0) & (followers & followers.wrapping_sub(1) == 0);
+        closed &= (i >= n) | (exactly_one & (next[i] != v) & (prev[i] != v));
+        followed |= followers;
+        after[i] = followers.trailing_zeros().min(N as u32 - 1) as u8;
+    }
+    // Each `next` has exactly one follower and every face follows one: the follower map is a
+    // permutation, so the `next` corners are distinct and are exactly the `prev` corners.
+    if !closed || followed != live {
+        return None;
+    }
+    // Every edge has two faces, one each way, and the neighbours are the `next` corners: those
+    // above v, sorted by a network over all slots (the rest set to NONE), are its edges.
+    let mut upper = next.map(|x| if x > v { x } else { NONE });
+    for (i, slot) in upper.iter_mut().enumerate() {
+        if i >= n {
+            *slot = NONE;
+        }
+    }
+    sort8(&mut upper);
+    let count = upper.iter().filter(|&&x| x != NONE).count();
+    scan.edges.extend(upper[..count].iter().map(|&u| [v, u]));
+    // One cycle through all n faces, or several: then the vertex joins separate fans.
+    let (mut current, mut steps) = (0usize, 0usize);
+    loop {
+        current = after[current] as usize;
+        steps += 1;
+        if current == 0 || steps == n {
+            break;
+        }
+    }
+    if current != 0 || steps != n {
+        return Some(VertexKind::Frozen);
+    }
+    Some(VertexKind::Interior)
+}
+
+/// Sorts eight values with a fixed network of 19 compare-exchanges (no branch on the data).
+fn sort8(values: &mut [u32; 8]) {
+    const NETWORK: [(usize, usize); 19] = [
+        (0, 2),
+        (1, 3),
+        (4, 6),
+        (5, 7),
+        (0, 4),
+        (1, 5),
+        (2, 6),
+        (3, 7),
+        (0, 1),
+        (2, 3),
+        (4, 5),
+        (6, 7),
+        (2, 4),
+        (3, 5),
+        (1, 4),
+        (3, 6),
+        (1, 2),
+        (3, 4),
+        (5, 6),
+    ];
+    for (i, j) in NETWORK {
+        let (lo, hi) = (values[i].min(values[j]), values[i].max(values[j]));
+        values[i] = lo;
+        values[j] = hi;
+    }
 }
 
 /// [`scan_fans`] for one fan of at most [`SMALL_FAN`] faces. Every corner's two edges are counted
@@ -1985,6 +2079,20 @@ mod tests {
             assert_eq!(small_kind, large_kind, "{name}: class of vertex {v}");
             assert_eq!(small.edges, large.edges, "{name}: edges of vertex {v}");
             assert_eq!(small.boundary_edges, large.boundary_edges, "{name}: boundary edges of vertex {v}");
+            // The closed-fan scan, where it answers, answers as the counting scan does.
+            if let Some(slots) = fan.inline_slots() {
+                let mut closed = empty();
+                if let Some(closed_kind) = scan_closed_fan(v as u32, slots, fan.len(), &mut closed) {
+                    assert_eq!(closed_kind, small_kind, "{name}: closed-fan class of vertex {v}");
+                    assert_eq!(closed.edges, small.edges, "{name}: closed-fan edges of vertex {v}");
+                    assert!(small.boundary_edges.is_empty(), "{name}: vertex {v} has boundary edges");
+                } else {
+                    assert!(
+                        small_kind != VertexKind::Interior || fan.len() < 2,
+                        "{name}: interior vertex {v} left to the counting scan"
+                    );
+                }
+            }
         }
     }
 
@@ -2027,6 +2135,19 @@ mod tests {
         let hub_faces: Vec<[u32; 3]> = (0..ring).map(|i| [0, 2 + i, 2 + (i + 1) % ring]).collect();
         let mut cone_faces = hub_faces.clone();
         cone_faces.extend((0..ring).map(|i| [1, 2 + (i + 1) % ring, 2 + i]));
+        // Two closed cones sharing their apex: each fan at the apex closes, but into two cycles.
+        let double_cone = square(
+            vec![
+                p(0., 0., 0.),
+                p(1., 0., 1.),
+                p(-1., 1., 1.),
+                p(-1., -1., 1.),
+                p(1., 0., -1.),
+                p(-1., 1., -1.),
+                p(-1., -1., -1.),
+            ],
+            vec![[0, 1, 2], [0, 2, 3], [0, 3, 1], [0, 5, 4], [0, 6, 5], [0, 4, 6], [1, 3, 2], [4, 5, 6]],
+        );
         let hub_disc = square(hub_positions.clone(), hub_faces);
         let hub_cone = square(hub_positions, cone_faces);
         let mut cases: Vec<(String, Mesh)> = vec![
@@ -2039,6 +2160,7 @@ mod tests {
             ("flipped".into(), flipped),
             ("hub disc".into(), hub_disc),
             ("hub cone".into(), hub_cone),
+            ("double cone".into(), double_cone),
         ];
         if let Some(dir) = crate::datasets::require_shared_meshes("fan_scan_agrees_with_the_edge_table") {
             for name in crate::datasets::SHARED_MESHES {
@@ -2058,5 +2180,15 @@ mod tests {
         assert_eq!(frozen(&cases[4].1), vec![0], "bowtie centre");
         assert_eq!(frozen(&cases[5].1), vec![0, 1], "fin edge");
         assert_eq!(frozen(&cases[6].1), vec![1, 2], "edge between faces of opposite orientation");
+        assert_eq!(frozen(&cases[9].1), vec![0], "apex of two closed cones");
+        let options = SimplifyOptions::default();
+        let (state, _) = State::new(&cases[9].1, &options);
+        let mut scan = Scan { kind: Vec::new(), edges: Vec::new(), boundary_edges: Vec::new() };
+        let apex = &state.fans[0];
+        assert_eq!(
+            scan_closed_fan(0, apex.inline_slots().expect("six faces are inline"), apex.len(), &mut scan),
+            Some(VertexKind::Frozen),
+            "the closed-fan scan sees the two cycles"
+        );
     }
 }
