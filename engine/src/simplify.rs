@@ -1518,34 +1518,37 @@ fn scan_closed_fan(v: u32, slots: &[Corner; FAN_INLINE], n: usize, scan: &mut Sc
     Some(VertexKind::Interior)
 }
 
-/// Sorts eight values with a fixed network of 19 compare-exchanges (no branch on the data).
+/// Sorts eight values with a fixed network of 19 compare-exchanges (no branch on the data), each
+/// written out on locals so that they stay in registers.
 fn sort8(values: &mut [u32; 8]) {
-    const NETWORK: [(usize, usize); 19] = [
-        (0, 2),
-        (1, 3),
-        (4, 6),
-        (5, 7),
-        (0, 4),
-        (1, 5),
-        (2, 6),
-        (3, 7),
-        (0, 1),
-        (2, 3),
-        (4, 5),
-        (6, 7),
-        (2, 4),
-        (3, 5),
-        (1, 4),
-        (3, 6),
-        (1, 2),
-        (3, 4),
-        (5, 6),
-    ];
-    for (i, j) in NETWORK {
-        let (lo, hi) = (values[i].min(values[j]), values[i].max(values[j]));
-        values[i] = lo;
-        values[j] = hi;
+    let [mut v0, mut v1, mut v2, mut v3, mut v4, mut v5, mut v6, mut v7] = *values;
+    macro_rules! exchange {
+        ($x:ident, $y:ident) => {
+            let (lo, hi) = ($x.min($y), $x.max($y));
+            $x = lo;
+            $y = hi;
+        };
     }
+    exchange!(v0, v2);
+    exchange!(v1, v3);
+    exchange!(v4, v6);
+    exchange!(v5, v7);
+    exchange!(v0, v4);
+    exchange!(v1, v5);
+    exchange!(v2, v6);
+    exchange!(v3, v7);
+    exchange!(v0, v1);
+    exchange!(v2, v3);
+    exchange!(v4, v5);
+    exchange!(v6, v7);
+    exchange!(v2, v4);
+    exchange!(v3, v5);
+    exchange!(v1, v4);
+    exchange!(v3, v6);
+    exchange!(v1, v2);
+    exchange!(v3, v4);
+    exchange!(v5, v6);
+    *values = [v0, v1, v2, v3, v4, v5, v6, v7];
 }
 
 /// [`scan_fans`] for one fan of at most [`SMALL_FAN`] faces. Every corner's two edges are counted
