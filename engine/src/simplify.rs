@@ -65,6 +65,7 @@
 //!    possible (one moved face in 600 to 10 000 on bunny, nefertiti and fandisk); debug builds check
 //!    every skipped one anyway.
 
+use std::borrow::Cow;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering as AtomicOrdering};
 use std::time::Instant;
@@ -1401,6 +1402,24 @@ fn target_faces(options: &SimplifyOptions, faces: usize) -> Result<usize, MeshEr
     })
 }
 
+/// [`prepare`] without the copy when there is nothing to drop (the usual input): the mesh itself,
+/// borrowed, with the identity as the input index of each vertex.
+fn prepare_borrowed(mesh: &Mesh) -> (Cow<'_, Mesh>, Vec<u32>, usize) {
+    let mut used = vec![false; mesh.vertex_count()];
+    let mut clean = true;
+    for t in &mesh.triangles {
+        clean &= t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
+        for &v in t {
+            used[v as usize] = true;
+        }
+    }
+    if clean && used.iter().all(|&u| u) {
+        return (Cow::Borrowed(mesh), (0..mesh.vertex_count() as u32).collect(), 0);
+    }
+    let (prepared, input_vertex, dropped) = prepare(mesh);
+    (Cow::Owned(prepared), input_vertex, dropped)
+}
+
 /// Drops faces that repeat a vertex and vertices that no face uses. Returns the prepared mesh,
 /// the input index of each kept vertex, and the number of dropped faces.
 pub fn prepare(mesh: &Mesh) -> (Mesh, Vec<u32>, usize) {
@@ -1752,7 +1771,7 @@ fn single_fan(fan: &[Corner], by_next: &mut Vec<(u32, u32)>, by_prev: &mut Vec<(
 pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, MeshError> {
     let started = Instant::now();
     mesh.check()?;
-    let (prepared, input_vertex, dropped) = prepare(mesh);
+    let (prepared, input_vertex, dropped) = prepare_borrowed(mesh);
     if prepared.triangles.is_empty() {
         return Err(MeshError::Empty { what: "no faces" });
     }
@@ -1764,7 +1783,8 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
             reason: format!("{} vertices: the distance guard handles fewer than 2³¹", prepared.vertex_count()),
         });
     }
-    let units = DistanceUnits::new(&prepared.surface_bounds().expect("has faces"));
+    // Every vertex of the prepared mesh is on a face: its bounds are its surface's.
+    let units = DistanceUnits::new(&prepared.bounds().expect("has faces"));
     let (mut state, edges) = State::new(&prepared, options);
     // Melax's cost reads face normals through the triangle array; the quadric costs never do.
     state.track_triangles = options.metric == Metric::Melax;
