@@ -80,7 +80,7 @@ use crate::hausdorff::{HausdorffOptions, HausdorffReport, hausdorff};
 use crate::mesh::{DistanceUnits, Mesh};
 use crate::pm::{CollapseRecord, ProgressiveMesh};
 use crate::prefetch::prefetch;
-use crate::quadric::Quadric;
+use crate::quadric::{Quadric, QuadricPair};
 use crate::queue::{CollapseQueue, QueueEntry, order_key};
 
 /// The collapse cost.
@@ -1183,9 +1183,50 @@ impl<'o> State<'o> {
             }
         }
         neighbours.truncate(count);
-        for &u in neighbours.iter() {
+        let mut pairs = neighbours.chunks_exact(2);
+        for pair in &mut pairs {
+            for entry in self.entry_pair(v, [pair[0], pair[1]]).into_iter().flatten() {
+                heap.push(entry);
+            }
+        }
+        for &u in pairs.remainder() {
             self.push_edge(v, u, heap);
         }
+    }
+
+    /// [`State::entry`] of edges {v, us[0]} and {v, us[1]}: in the usual case (interior ends, a
+    /// quadric cost, optimal placement) both quadric sums are minimised side by side
+    /// ([`QuadricPair`]); an edge outside it, or whose minimiser is refused, is ranked alone. The
+    /// same keys to the bit: the pair performs the scalar operations lane by lane, and the sums,
+    /// the midpoint, the squared edge length and the normals' dot product do not depend on which
+    /// end comes first.
+    #[inline]
+    fn entry_pair(&self, v: u32, us: [u32; 2]) -> [Option<QueueEntry>; 2] {
+        let vv = &self.vertices[v as usize];
+        let (v0, v1) = (&self.vertices[us[0] as usize], &self.vertices[us[1] as usize]);
+        let quadric_cost = self.options.metric != Metric::Melax && self.options.placement == Placement::Optimal;
+        let interior = quadric_cost & (vv.kind == VertexKind::Interior);
+        let usual = [interior & (v0.kind == VertexKind::Interior), interior & (v1.kind == VertexKind::Interior)];
+        if !(usual[0] || usual[1]) {
+            return [self.entry(v, us[0]), self.entry(v, us[1])];
+        }
+        let pair = QuadricPair::sums(&vv.quadric, [&v0.quadric, &v1.quadric]);
+        let (points, solved) = pair.minimizers();
+        let errors = pair.errors(points);
+        let pv = to_f64(vv.position);
+        let mut out = [None; 2];
+        for (i, vu) in [v0, v1].into_iter().enumerate() {
+            let pu = to_f64(vu.position);
+            let near = (points[i] - (pv + pu) * 0.5).length_squared() <= (pv - pu).length_squared();
+            out[i] = if usual[i] && solved[i] && near {
+                let (a, b) = (v.min(us[i]), v.max(us[i]));
+                let key = order_key(errors[i] * self.normal_factor(vv, vu), errors[i]);
+                Some(QueueEntry::new(key, a, b, self.stamp(a, b)))
+            } else {
+                self.entry(v, us[i])
+            };
+        }
+        out
     }
 
     fn push_edge(&self, a: u32, b: u32, heap: &mut CollapseQueue) {
