@@ -311,8 +311,9 @@ pub(crate) struct State<'o> {
     /// Quadric, normal, position and class of each vertex (see [`VertexData`]).
     pub(crate) vertices: Vec<VertexData>,
     /// Each face's corners, kept current by every collapse while `track_triangles` is set; the
-    /// simplifier's own loop clears it (the fans carry what the loop reads) and rebuilds the
-    /// array once at the end from the log ([`State::rebuild_triangles`]).
+    /// simplifier's own loop does without (the fans carry what the loop reads: the state is made
+    /// without the array) and builds it once at the end from the log
+    /// ([`State::rebuild_triangles`]).
     pub(crate) triangles: Vec<[u32; 3]>,
     pub(crate) track_triangles: bool,
     pub(crate) face_alive: Vec<bool>,
@@ -1252,6 +1253,12 @@ impl<'o> State<'o> {
     /// fans, vertex classes, area-weighted quadrics with boundary constraint planes, Gouraud
     /// normals. Also returns every undirected edge once, as `[low, high]`, sorted.
     pub(crate) fn new(mesh: &Mesh, options: &'o SimplifyOptions) -> (State<'o>, Vec<[u32; 2]>) {
+        State::with_tracking(mesh, options, true)
+    }
+
+    /// [`State::new`], keeping the triangle array current through the collapses or (without
+    /// `track`) leaving it empty until [`State::rebuild_triangles`].
+    pub(crate) fn with_tracking(mesh: &Mesh, options: &'o SimplifyOptions, track: bool) -> (State<'o>, Vec<[u32; 2]>) {
         let vertex_count = mesh.vertex_count();
         // The passes over the faces below write to their corners' fans and blocks, in the input's
         // vertex order, which can be far from its face order: each asks for the data of the face
@@ -1277,8 +1284,8 @@ impl<'o> State<'o> {
                 .zip(kind)
                 .map(|(&position, kind)| VertexData { position, kind, ..Default::default() })
                 .collect(),
-            triangles: mesh.triangles.clone(),
-            track_triangles: true,
+            triangles: if track { mesh.triangles.clone() } else { Vec::new() },
+            track_triangles: track,
             face_alive: vec![true; mesh.face_count()],
             fans,
             vertex_alive: vec![true; vertex_count],
@@ -1360,7 +1367,9 @@ impl<'o> State<'o> {
 
     /// Brings `triangles` up to date after a run without tracking: every corner names the vertex
     /// its input vertex was merged into, last merge first (the same as renaming at each collapse).
-    pub(crate) fn rebuild_triangles(&mut self, log: &[CollapseRecord]) {
+    /// Built from the input's triangles (`mesh`, the one the state was made from): the state
+    /// holds no copy while it does not track them.
+    pub(crate) fn rebuild_triangles(&mut self, mesh: &Mesh, log: &[CollapseRecord]) {
         if self.track_triangles {
             return;
         }
@@ -1368,9 +1377,7 @@ impl<'o> State<'o> {
         for record in log.iter().rev() {
             last[record.removed as usize] = last[record.survivor as usize];
         }
-        for t in self.triangles.iter_mut() {
-            *t = t.map(|v| last[v as usize]);
-        }
+        self.triangles = mesh.triangles.iter().map(|t| t.map(|v| last[v as usize])).collect();
         self.track_triangles = true;
     }
 
@@ -1826,9 +1833,8 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     }
     // Every vertex of the prepared mesh is on a face: its bounds are its surface's.
     let units = DistanceUnits::new(&prepared.bounds().expect("has faces"));
-    let (mut state, edges) = State::new(&prepared, options);
     // Melax's cost reads face normals through the triangle array; the quadric costs never do.
-    state.track_triangles = options.metric == Metric::Melax;
+    let (mut state, edges) = State::with_tracking(&prepared, options, options.metric == Metric::Melax);
     let vertex_count = prepared.vertex_count();
 
     // Heapify once (linear) rather than pushing edge by edge.
@@ -1935,7 +1941,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
 
     // The guard's tree and tables are done with: their memory goes back before the outputs'.
     state.guard = None;
-    state.rebuild_triangles(&log);
+    state.rebuild_triangles(&prepared, &log);
     let simplified = state.output_mesh();
     let progressive = options.record_progressive.then(|| {
         ProgressiveMesh::from_log(
