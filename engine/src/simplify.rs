@@ -967,11 +967,15 @@ impl<'o> State<'o> {
     /// branches of the checks (real loads did this too, 3–7% less well: they stall the core).
     #[inline]
     fn prefetch_ring(&self, a: u32, b: u32) {
-        for v in [a, b] {
+        // Not a nor b (each is a `next` around the other: their data is in cache already). A
+        // hint that has to wait for a free fill buffer stalls the core, so none is wasted.
+        for (v, other) in [(a, b), (b, a)] {
             for corner in &self.fans[v as usize] {
-                let x = corner.next as usize;
-                self.vertices[x].prefetch();
-                self.fans[x].prefetch();
+                let x = corner.next;
+                if x != other {
+                    self.vertices[x as usize].prefetch();
+                    self.fans[x as usize].prefetch();
+                }
             }
         }
     }
