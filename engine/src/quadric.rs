@@ -54,12 +54,7 @@ impl Quadric {
     /// `vᵀ Q v`: the weighted sum of squared plane distances at `v` (never negative).
     #[inline(always)]
     pub fn error(&self, v: DVec3) -> f64 {
-        let (x, y, z) = (v.x, v.y, v.z);
-        let e = x * (self.a2 * x + 2.0 * (self.ab * y + self.ac * z + self.ad))
-            + y * (self.b2 * y + 2.0 * (self.bc * z + self.bd))
-            + z * (self.c2 * z + 2.0 * self.cd)
-            + self.d2;
-        e.max(0.0)
+        self.coefficients().error([v.x, v.y, v.z]).max(0.0)
     }
 
     /// Root of the weighted mean squared distance at `v`: an absolute distance estimate.
@@ -72,9 +67,105 @@ impl Quadric {
     /// The determinant is compared with the cube of the matrix scale so that the test does not
     /// depend on the mesh's units: a flat or cylindrical neighbourhood (rank < 3) has no unique
     /// minimiser and returns `None`.
+    #[inline]
     pub fn minimizer(&self) -> Option<DVec3> {
-        // The matrix is symmetric, so its adjugate has six distinct cofactors; the determinant
-        // and the solution `−A⁻¹·(ad, bd, cd)` both come from them (Cramer's rule).
+        let q = self.coefficients();
+        let adjugate = q.adjugate();
+        if !conditioned(adjugate.scale, adjugate.det) {
+            return None;
+        }
+        let v = DVec3::from_array(q.solve(&adjugate));
+        v.is_finite().then_some(v)
+    }
+
+    #[inline(always)]
+    fn coefficients(&self) -> Coefficients<f64> {
+        let q = self;
+        Coefficients {
+            a2: q.a2,
+            ab: q.ab,
+            ac: q.ac,
+            ad: q.ad,
+            b2: q.b2,
+            bc: q.bc,
+            bd: q.bd,
+            c2: q.c2,
+            cd: q.cd,
+            d2: q.d2,
+        }
+    }
+}
+
+/// Whether a system with this scale (trace) and determinant has a unique, well-conditioned
+/// solution: the determinant is compared with the cube of the scale so that the test does not
+/// depend on the mesh's units.
+#[inline(always)]
+fn conditioned(scale: f64, det: f64) -> bool {
+    !(scale.is_nan() || scale <= 0.0 || det.abs() <= 1e-9 * scale * scale * scale)
+}
+
+/// The arithmetic [`Coefficients`] needs: `f64`, or two `f64` lanes ([`F2`]).
+trait Lane:
+    Copy
+    + std::ops::Add<Output = Self>
+    + std::ops::Sub<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::ops::Div<Output = Self>
+    + std::ops::Neg<Output = Self>
+{
+    fn splat(x: f64) -> Self;
+}
+
+impl Lane for f64 {
+    #[inline(always)]
+    fn splat(x: f64) -> f64 {
+        x
+    }
+}
+
+/// A quadric's ten coefficients, in one lane or in two side by side: the error and the minimiser
+/// are written once, for both, so a pair computes exactly what the scalar code does.
+#[derive(Debug, Clone, Copy)]
+struct Coefficients<T> {
+    a2: T,
+    ab: T,
+    ac: T,
+    ad: T,
+    b2: T,
+    bc: T,
+    bd: T,
+    c2: T,
+    cd: T,
+    d2: T,
+}
+
+/// The six distinct cofactors of the symmetric 3×3 part, its determinant and its trace.
+struct Adjugate<T> {
+    c00: T,
+    c01: T,
+    c02: T,
+    c11: T,
+    c12: T,
+    c22: T,
+    det: T,
+    scale: T,
+}
+
+impl<T: Lane> Coefficients<T> {
+    /// `vᵀ Q v` (before clamping at zero).
+    #[inline(always)]
+    fn error(&self, [x, y, z]: [T; 3]) -> T {
+        let two = T::splat(2.0);
+        x * (self.a2 * x + two * (self.ab * y + self.ac * z + self.ad))
+            + y * (self.b2 * y + two * (self.bc * z + self.bd))
+            + z * (self.c2 * z + two * self.cd)
+            + self.d2
+    }
+
+    /// The matrix is symmetric, so its adjugate has six distinct cofactors; the determinant and
+    /// the solution `−A⁻¹·(ad, bd, cd)` both come from them (Cramer's rule).
+    #[inline(always)]
+    fn adjugate(&self) -> Adjugate<T> {
         let (a, b, c, d, e, f) = (self.a2, self.ab, self.ac, self.b2, self.bc, self.c2);
         let c00 = d * f - e * e;
         let c01 = c * e - b * f;
@@ -83,17 +174,18 @@ impl Quadric {
         let c12 = b * c - a * e;
         let c22 = a * d - b * b;
         let det = a * c00 + b * c01 + c * c02;
-        let scale = a + d + f;
-        if scale.is_nan() || scale <= 0.0 || det.abs() <= 1e-9 * scale * scale * scale {
-            return None;
-        }
-        let r = DVec3::new(self.ad, self.bd, self.cd);
-        let v = -DVec3::new(
-            c00 * r.x + c01 * r.y + c02 * r.z,
-            c01 * r.x + c11 * r.y + c12 * r.z,
-            c02 * r.x + c12 * r.y + c22 * r.z,
-        ) / det;
-        v.is_finite().then_some(v)
+        Adjugate { c00, c01, c02, c11, c12, c22, det, scale: a + d + f }
+    }
+
+    /// The point minimising the error (meaningful where [`conditioned`] holds).
+    #[inline(always)]
+    fn solve(&self, m: &Adjugate<T>) -> [T; 3] {
+        let (rx, ry, rz) = (self.ad, self.bd, self.cd);
+        [
+            -(m.c00 * rx + m.c01 * ry + m.c02 * rz) / m.det,
+            -(m.c01 * rx + m.c11 * ry + m.c12 * rz) / m.det,
+            -(m.c02 * rx + m.c12 * ry + m.c22 * rz) / m.det,
+        ]
     }
 }
 
@@ -139,10 +231,20 @@ impl F2 {
     fn lanes(a: f64, b: f64) -> F2 {
         F2([a, b])
     }
+}
 
+impl Lane for F2 {
     #[inline(always)]
-    fn map(self, f: impl Fn(f64) -> f64) -> F2 {
-        F2([f(self.0[0]), f(self.0[1])])
+    fn splat(x: f64) -> F2 {
+        F2::splat(x)
+    }
+}
+
+impl std::ops::Neg for F2 {
+    type Output = F2;
+    #[inline(always)]
+    fn neg(self) -> F2 {
+        F2([-self.0[0], -self.0[1]])
     }
 }
 
@@ -165,80 +267,45 @@ f2_op!(Div, div, /);
 /// Two quadrics summed from a shared one, side by side: [`Quadric::minimizer`] and
 /// [`Quadric::error`] for both at once, lane by lane (see [`F2`]).
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct QuadricPair {
-    a2: F2,
-    ab: F2,
-    ac: F2,
-    ad: F2,
-    b2: F2,
-    bc: F2,
-    bd: F2,
-    c2: F2,
-    cd: F2,
-    d2: F2,
-}
+pub(crate) struct QuadricPair(Coefficients<F2>);
 
 impl QuadricPair {
     /// `[shared + others[0], shared + others[1]]` (the same sums as `Quadric`'s `+`, whose
     /// addition commutes).
     #[inline(always)]
     pub(crate) fn sums(shared: &Quadric, others: [&Quadric; 2]) -> QuadricPair {
-        let [p, q] = others;
+        let (s, p, q) = (shared.coefficients(), others[0].coefficients(), others[1].coefficients());
         let lane = |s: f64, x: f64, y: f64| F2::splat(s) + F2::lanes(x, y);
-        QuadricPair {
-            a2: lane(shared.a2, p.a2, q.a2),
-            ab: lane(shared.ab, p.ab, q.ab),
-            ac: lane(shared.ac, p.ac, q.ac),
-            ad: lane(shared.ad, p.ad, q.ad),
-            b2: lane(shared.b2, p.b2, q.b2),
-            bc: lane(shared.bc, p.bc, q.bc),
-            bd: lane(shared.bd, p.bd, q.bd),
-            c2: lane(shared.c2, p.c2, q.c2),
-            cd: lane(shared.cd, p.cd, q.cd),
-            d2: lane(shared.d2, p.d2, q.d2),
-        }
+        QuadricPair(Coefficients {
+            a2: lane(s.a2, p.a2, q.a2),
+            ab: lane(s.ab, p.ab, q.ab),
+            ac: lane(s.ac, p.ac, q.ac),
+            ad: lane(s.ad, p.ad, q.ad),
+            b2: lane(s.b2, p.b2, q.b2),
+            bc: lane(s.bc, p.bc, q.bc),
+            bd: lane(s.bd, p.bd, q.bd),
+            c2: lane(s.c2, p.c2, q.c2),
+            cd: lane(s.cd, p.cd, q.cd),
+            d2: lane(s.d2, p.d2, q.d2),
+        })
     }
 
     /// [`Quadric::minimizer`] of each lane: the points, and whether each is one (well
     /// conditioned and finite).
     #[inline(always)]
     pub(crate) fn minimizers(&self) -> ([DVec3; 2], [bool; 2]) {
-        let (a, b, c, d, e, f) = (self.a2, self.ab, self.ac, self.b2, self.bc, self.c2);
-        let c00 = d * f - e * e;
-        let c01 = c * e - b * f;
-        let c02 = b * e - c * d;
-        let c11 = a * f - c * c;
-        let c12 = b * c - a * e;
-        let c22 = a * d - b * b;
-        let det = a * c00 + b * c01 + c * c02;
-        let scale = a + d + f;
-        let bound = F2::splat(1e-9) * scale * scale * scale;
-        let (rx, ry, rz) = (self.ad, self.bd, self.cd);
-        let x = (c00 * rx + c01 * ry + c02 * rz).map(|v| -v) / det;
-        let y = (c01 * rx + c11 * ry + c12 * rz).map(|v| -v) / det;
-        let z = (c02 * rx + c12 * ry + c22 * rz).map(|v| -v) / det;
-        let mut points = [DVec3::ZERO; 2];
-        let mut ok = [false; 2];
-        for i in 0..2 {
-            let (s, dt) = (scale.0[i], det.0[i]);
-            let conditioned = !(s.is_nan() || s <= 0.0 || dt.abs() <= bound.0[i]);
-            points[i] = DVec3::new(x.0[i], y.0[i], z.0[i]);
-            ok[i] = conditioned && points[i].is_finite();
-        }
-        (points, ok)
+        let adjugate = self.0.adjugate();
+        let [x, y, z] = self.0.solve(&adjugate);
+        let points = [DVec3::new(x.0[0], y.0[0], z.0[0]), DVec3::new(x.0[1], y.0[1], z.0[1])];
+        let ok = |i: usize| conditioned(adjugate.scale.0[i], adjugate.det.0[i]) && points[i].is_finite();
+        (points, [ok(0), ok(1)])
     }
 
     /// [`Quadric::error`] of each lane at its point.
     #[inline(always)]
     pub(crate) fn errors(&self, points: [DVec3; 2]) -> [f64; 2] {
-        let x = F2::lanes(points[0].x, points[1].x);
-        let y = F2::lanes(points[0].y, points[1].y);
-        let z = F2::lanes(points[0].z, points[1].z);
-        let two = F2::splat(2.0);
-        let e = x * (self.a2 * x + two * (self.ab * y + self.ac * z + self.ad))
-            + y * (self.b2 * y + two * (self.bc * z + self.bd))
-            + z * (self.c2 * z + two * self.cd)
-            + self.d2;
+        let [p, q] = points;
+        let e = self.0.error([F2::lanes(p.x, q.x), F2::lanes(p.y, q.y), F2::lanes(p.z, q.z)]);
         [e.0[0].max(0.0), e.0[1].max(0.0)]
     }
 }
