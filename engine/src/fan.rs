@@ -151,15 +151,22 @@ impl FanSlot {
         }
     }
 
+    /// Bit `j` set where inline slot `j` passes `test`, over every slot (padding included: the
+    /// tests used here never pass it, NONE being no face and no vertex).
+    #[inline(always)]
+    fn inline_hits(&self, test: impl Fn(&Corner) -> bool) -> u32 {
+        let mut hits = 0u32;
+        for (j, corner) in self.inline.iter().enumerate() {
+            hits |= (test(corner) as u32) << j;
+        }
+        hits
+    }
+
     /// Where the corner of `face` is, if the fan has one.
     #[inline]
     pub(crate) fn find_face(&self, face: u32) -> Option<usize> {
         if self.is_inline() {
-            // Over every inline slot: padding never matches (NONE is no face).
-            let mut hits = 0u32;
-            for (j, corner) in self.inline.iter().enumerate() {
-                hits |= ((corner.face == face) as u32) << j;
-            }
+            let hits = self.inline_hits(|corner| corner.face == face);
             (hits != 0).then(|| hits.trailing_zeros() as usize)
         } else {
             self.spill.iter().position(|c| c.face == face)
@@ -172,11 +179,7 @@ impl FanSlot {
     pub(crate) fn touching(&self, x: u32) -> ([Corner; 2], usize) {
         let mut out = [Corner::NONE; 2];
         if self.is_inline() {
-            // Padding never touches a vertex (NONE is no vertex).
-            let mut hits = 0u32;
-            for (j, corner) in self.inline.iter().enumerate() {
-                hits |= (((corner.next == x) | (corner.prev == x)) as u32) << j;
-            }
+            let hits = self.inline_hits(|corner| corner.touches(x));
             let count = hits.count_ones() as usize;
             if hits != 0 {
                 out[0] = self.inline[hits.trailing_zeros() as usize];

@@ -153,28 +153,12 @@ impl CollapseQueue {
                     }
                 }
                 let children: &[QueueEntry; ARITY] = children.try_into().expect("four children");
-                let mut best = 0;
-                let mut best_rank = children[0].rank();
-                for (c, child) in children.iter().enumerate().skip(1) {
-                    let r = child.rank();
-                    if r < best_rank {
-                        best = c;
-                        best_rank = r;
-                    }
-                }
+                let (best, best_rank) = lowest(children);
                 (first + best, best_rank)
             } else if first < n {
                 // The last parent: fewer than four children, none with children of its own.
-                let mut best = first;
-                let mut best_rank = entries[first].rank();
-                for (c, child) in entries.iter().enumerate().skip(first + 1) {
-                    let r = child.rank();
-                    if r < best_rank {
-                        best = c;
-                        best_rank = r;
-                    }
-                }
-                (best, best_rank)
+                let (best, best_rank) = lowest(&entries[first..]);
+                (first + best, best_rank)
             } else {
                 break;
             };
@@ -186,6 +170,21 @@ impl CollapseQueue {
         }
         entries[i] = entry;
     }
+}
+
+/// The position and rank of the lowest-ranked of `children` (the first of equals), not empty.
+#[inline(always)]
+fn lowest(children: &[QueueEntry]) -> (usize, u64) {
+    let mut best = 0;
+    let mut best_rank = children[0].rank();
+    for (c, child) in children.iter().enumerate().skip(1) {
+        let r = child.rank();
+        if r < best_rank {
+            best = c;
+            best_rank = r;
+        }
+    }
+    (best, best_rank)
 }
 
 #[cfg(test)]

@@ -1454,46 +1454,49 @@ fn target_faces(options: &SimplifyOptions, faces: usize) -> Result<usize, MeshEr
     })
 }
 
-/// [`prepare`] without the copy when there is nothing to drop (the usual input): the mesh itself,
-/// borrowed, with the identity as the input index of each vertex.
-fn prepare_borrowed(mesh: &Mesh) -> (Cow<'_, Mesh>, Vec<u32>, usize) {
-    let mut used = vec![false; mesh.vertex_count()];
-    let mut clean = true;
-    for t in &mesh.triangles {
-        clean &= t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
-        for &v in t {
-            used[v as usize] = true;
-        }
-    }
-    if clean && used.iter().all(|&u| u) {
-        return (Cow::Borrowed(mesh), (0..mesh.vertex_count() as u32).collect(), 0);
-    }
-    let (prepared, input_vertex, dropped) = prepare(mesh);
-    (Cow::Owned(prepared), input_vertex, dropped)
-}
-
-/// Drops faces that repeat a vertex and vertices that no face uses. Returns the prepared mesh,
-/// the input index of each kept vertex, and the number of dropped faces.
-pub fn prepare(mesh: &Mesh) -> (Mesh, Vec<u32>, usize) {
-    let kept: Vec<[u32; 3]> =
-        mesh.triangles.iter().copied().filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]).collect();
-    let dropped = mesh.face_count() - kept.len();
+/// [`prepare`], borrowing the mesh itself when there is nothing to drop (the usual input); the
+/// input index of each vertex is then the identity.
+fn prepare_in_place(mesh: &Mesh) -> (Cow<'_, Mesh>, Vec<u32>, usize) {
+    let repeats_a_vertex = |t: &[u32; 3]| t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
     let mut new_index = vec![NONE; mesh.vertex_count()];
-    for t in &kept {
+    let mut dropped = 0;
+    for t in &mesh.triangles {
+        if repeats_a_vertex(t) {
+            dropped += 1;
+            continue;
+        }
         for &v in t {
             new_index[v as usize] = 0;
         }
     }
-    let mut input_vertex = Vec::new();
+    let mut input_vertex = Vec::with_capacity(mesh.vertex_count());
     for (v, slot) in new_index.iter_mut().enumerate() {
         if *slot != NONE {
             *slot = input_vertex.len() as u32;
             input_vertex.push(v as u32);
         }
     }
+    if dropped == 0 && input_vertex.len() == mesh.vertex_count() {
+        return (Cow::Borrowed(mesh), input_vertex, 0);
+    }
     let positions = input_vertex.iter().map(|&v| mesh.positions[v as usize]).collect();
-    let triangles = kept.iter().map(|t| t.map(|v| new_index[v as usize])).collect();
-    (Mesh { positions, triangles, corners: Default::default() }, input_vertex, dropped)
+    let triangles =
+        mesh.triangles.iter().filter(|t| !repeats_a_vertex(t)).map(|t| t.map(|v| new_index[v as usize])).collect();
+    (Cow::Owned(Mesh { positions, triangles, corners: Default::default() }), input_vertex, dropped)
+}
+
+/// Drops faces that repeat a vertex and vertices that no face uses. Returns the prepared mesh
+/// (without per-corner attributes), the input index of each kept vertex, and the number of
+/// dropped faces.
+pub fn prepare(mesh: &Mesh) -> (Mesh, Vec<u32>, usize) {
+    let (prepared, input_vertex, dropped) = prepare_in_place(mesh);
+    let prepared = match prepared {
+        Cow::Borrowed(m) => {
+            Mesh { positions: m.positions.clone(), triangles: m.triangles.clone(), corners: Default::default() }
+        }
+        Cow::Owned(m) => m,
+    };
+    (prepared, input_vertex, dropped)
 }
 
 /// What one pass over the fans finds.
@@ -1823,7 +1826,7 @@ fn single_fan(fan: &[Corner], by_next: &mut Vec<(u32, u32)>, by_prev: &mut Vec<(
 pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, MeshError> {
     let started = Instant::now();
     mesh.check()?;
-    let (prepared, input_vertex, dropped) = prepare_borrowed(mesh);
+    let (prepared, input_vertex, dropped) = prepare_in_place(mesh);
     if prepared.triangles.is_empty() {
         return Err(MeshError::Empty { what: "no faces" });
     }
