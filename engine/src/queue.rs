@@ -87,19 +87,11 @@ impl CollapseQueue {
         self.entries.len()
     }
 
-    /// Keeps only the entries `keep` accepts, in their order, and restores the heap order (linear
-    /// time). Every entry is copied and the write position advanced by the verdict, without a
-    /// branch on it: a quarter to a third of the entries are dropped, in no pattern a predictor
-    /// could learn.
-    pub(crate) fn retain(&mut self, mut keep: impl FnMut(&QueueEntry) -> bool) {
+    /// Keeps only the entries `keep` accepts ([`retain_unordered`]) and restores the heap order
+    /// (linear time).
+    pub(crate) fn retain(&mut self, keep: impl FnMut(&QueueEntry) -> bool) {
         let mut entries = std::mem::take(&mut self.entries);
-        let mut kept = 0;
-        for read in 0..entries.len() {
-            let entry = entries[read];
-            entries[kept] = entry;
-            kept += keep(&entry) as usize;
-        }
-        entries.truncate(kept);
+        retain_unordered(&mut entries, keep);
         *self = CollapseQueue::from_vec(entries);
     }
 
@@ -239,30 +231,26 @@ impl TieredQueue {
 
     /// The lowest-ranked entry, refilling the heap from the array if it is empty.
     pub(crate) fn top(&mut self, current: impl Fn(&QueueEntry) -> bool) -> Option<&QueueEntry> {
-        if self.hot.len() == 0 {
-            self.refill(current);
-        }
+        self.refill_if_dry(current);
         self.hot.peek()
     }
 
     pub(crate) fn pop(&mut self, current: impl Fn(&QueueEntry) -> bool) -> Option<QueueEntry> {
-        if self.hot.len() == 0 {
-            self.refill(current);
-        }
+        self.refill_if_dry(current);
         self.hot.pop()
     }
 
-    /// Drops the stale entries (those `current` refuses): the array's in one pass without a branch
-    /// on the verdicts, the heap's by [`CollapseQueue::retain`].
+    #[inline]
+    fn refill_if_dry(&mut self, current: impl Fn(&QueueEntry) -> bool) {
+        if self.hot.len() == 0 {
+            self.refill(current);
+        }
+    }
+
+    /// Drops the stale entries (those `current` refuses) of the heap and of the array.
     pub(crate) fn sweep(&mut self, current: impl Fn(&QueueEntry) -> bool) {
         self.hot.retain(&current);
-        let mut kept = 0;
-        for read in 0..self.cold.len() {
-            let entry = self.cold[read];
-            self.cold[kept] = entry;
-            kept += current(&entry) as usize;
-        }
-        self.cold.truncate(kept);
+        retain_unordered(&mut self.cold, current);
     }
 
     /// Moves the lowest-ranked current entries of the array into the (empty) heap, dropping the
@@ -301,6 +289,19 @@ impl TieredQueue {
             }
         }
     }
+}
+
+/// Keeps the entries `keep` accepts, in their order: every entry is copied and the write position
+/// advanced by the verdict, without a branch on it (a quarter to a third of the entries are dropped,
+/// in no pattern a predictor could learn).
+fn retain_unordered(entries: &mut Vec<QueueEntry>, mut keep: impl FnMut(&QueueEntry) -> bool) {
+    let mut kept = 0;
+    for read in 0..entries.len() {
+        let entry = entries[read];
+        entries[kept] = entry;
+        kept += keep(&entry) as usize;
+    }
+    entries.truncate(kept);
 }
 
 /// The position and rank of the lowest-ranked of `children` (the first of equals), not empty.

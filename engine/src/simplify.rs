@@ -1252,6 +1252,12 @@ impl<'o> State<'o> {
         Some(QueueEntry::new(order_key(choice.cost, choice.error, length2), a, b, self.stamp(a, b)))
     }
 
+    /// Whether neither endpoint of `entry` changed since it was queued.
+    #[inline]
+    fn is_current(&self, entry: &QueueEntry) -> bool {
+        self.stamp(entry.a(), entry.b & !GUARDED) == entry.stamp
+    }
+
     /// Sum of the version stamps of `a` and `b` (see [`QueueEntry::stamp`]).
     #[inline]
     fn stamp(&self, a: u32, b: u32) -> u32 {
@@ -1886,7 +1892,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
         {
             return Err(MeshError::Cancelled);
         }
-        let current = |e: &QueueEntry| state.stamp(e.a(), e.b & !GUARDED) == e.stamp;
+        let current = |e: &QueueEntry| state.is_current(e);
         let Some(entry) = heap.pop(current) else {
             // Dry before the target: refused candidates may have become legal since.
             if passes >= MAX_PASSES || collapses_this_pass == 0 {
@@ -1908,7 +1914,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
         if let Some(next) = heap.peek() {
             state.prefetch_edge(next.a(), next.b & !GUARDED);
         }
-        if state.stamp(a, b) != entry.stamp {
+        if !state.is_current(&entry) {
             continue; // stale: an endpoint changed (or was removed) since this entry was queued
         }
         if let Some(guard) = &state.guard
@@ -1948,7 +1954,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
         // has about 1.5 edges per face, so once the queue holds more than 2 entries per face a
         // quarter or more are stale: one linear sweep drops them.
         if heap.len() > 2 * faces_alive {
-            heap.sweep(|e| state.stamp(e.a(), e.b & !GUARDED) == e.stamp);
+            heap.sweep(|e| state.is_current(e));
         }
     };
 
