@@ -57,7 +57,17 @@ fn generate_info_convert_hausdorff_chain() {
     assert_eq!(info["faces"], 2 * 32 * 16);
     assert!(meshlod(&["convert", s(&obj), s(&ply), "--clean"]).status.success());
     let same = ok_json(&["hausdorff", s(&obj), s(&ply), "--json"]);
-    for key in ["hausdorff", "mean", "rms", "hausdorff_diag_pct", "samples"] {
+    for key in [
+        "hausdorff",
+        "hausdorff_lower",
+        "tolerance",
+        "mean",
+        "rms",
+        "hausdorff_diag_pct",
+        "samples",
+        "a_to_b",
+        "seconds",
+    ] {
         assert!(same.get(key).is_some(), "hausdorff lacks {key}");
     }
     assert_eq!(same["hausdorff"], 0.0);
@@ -68,6 +78,13 @@ fn generate_info_convert_hausdorff_chain() {
     let d = ok_json(&["hausdorff", s(&obj), s(&coarse), "--json", "--samples", "2000"]);
     assert!(d["hausdorff"].as_f64().unwrap() > 0.01);
     assert!(d["mean"].as_f64().unwrap() < d["hausdorff"].as_f64().unwrap());
+    // Certified: the lower bound is a distance reached, the upper bound within the tolerance of it.
+    let (upper, lower) = (d["hausdorff"].as_f64().unwrap(), d["hausdorff_lower"].as_f64().unwrap());
+    assert!(lower <= upper && upper - lower <= 1e-3 * lower, "[{lower}, {upper}]");
+    assert_eq!(d["converged"], true);
+    let loose = ok_json(&["hausdorff", s(&obj), s(&coarse), "--json", "--tolerance", "0.1"]);
+    let loose_upper = loose["hausdorff"].as_f64().unwrap();
+    assert!(loose_upper >= lower && loose_upper <= 1.1 * loose["hausdorff_lower"].as_f64().unwrap());
 }
 
 #[test]
@@ -87,7 +104,8 @@ fn errors_are_clear_and_nonzero() {
     let good = dir.join("good.obj");
     std::fs::write(&good, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
     fails_with(&["convert", s(&good), s(&dir.join("out.stl"))], "unsupported format");
-    fails_with(&["hausdorff", s(&good), s(&good), "--samples", "0"], "--samples");
+    fails_with(&["hausdorff", s(&good), s(&good), "--samples", "0"], "samples");
+    fails_with(&["hausdorff", s(&good), s(&good), "--tolerance", "0"], "tolerance");
 }
 
 #[test]

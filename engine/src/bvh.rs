@@ -133,6 +133,50 @@ impl TriangleBvh {
         }
     }
 
+    /// The corners of the triangle in `slot`, widened to f64.
+    #[inline]
+    pub fn slot_corners(&self, slot: u32) -> [DVec3; 3] {
+        self.corners[slot as usize].map(widen)
+    }
+
+    /// Appends to `out` the slots whose triangle's bounding box meets the box `[min, max]`; stops
+    /// and returns false once `out` holds more than `limit` slots.
+    pub fn slots_in_box(&self, min: DVec3, max: DVec3, limit: usize, out: &mut Vec<u32>) -> bool {
+        let mut stack: [u32; 64] = [0; 64];
+        let mut depth = 1;
+        let overlaps = |lo: [f32; 3], hi: [f32; 3]| {
+            let (lo, hi) = (widen(lo), widen(hi));
+            lo.cmple(max).all() && hi.cmpge(min).all()
+        };
+        while depth > 0 {
+            depth -= 1;
+            let index = stack[depth];
+            let node = self.nodes[index as usize];
+            if !overlaps(node.min, node.max) {
+                continue;
+            }
+            if node.count > 0 {
+                let start = node.start_or_right as usize;
+                for slot in start..start + node.count as usize {
+                    let [a, b, c] = self.corners[slot];
+                    let lo = [0, 1, 2].map(|k| a[k].min(b[k]).min(c[k]));
+                    let hi = [0, 1, 2].map(|k| a[k].max(b[k]).max(c[k]));
+                    if overlaps(lo, hi) {
+                        out.push(slot as u32);
+                        if out.len() > limit {
+                            return false;
+                        }
+                    }
+                }
+                continue;
+            }
+            stack[depth] = node.start_or_right;
+            stack[depth + 1] = index + 1;
+            depth += 2;
+        }
+        true
+    }
+
     /// The slot of each face of the mesh the tree was built from (`u32::MAX` for a face left out),
     /// for use as hints.
     pub fn slots_by_face(&self, faces: usize) -> Vec<u32> {

@@ -2026,7 +2026,8 @@ pub fn simplify_search_w(mesh: &Mesh, options: &SimplifyOptions, candidates: &[f
         .par_iter()
         .map(|&w| {
             let run = simplify(mesh, &SimplifyOptions { metric: Metric::Qfvp { w }, ..options.clone() })?;
-            let measured = hausdorff(mesh, &run.mesh, &HausdorffOptions::default())?;
+            let measured =
+                hausdorff(mesh, &run.mesh, &HausdorffOptions { cancel: options.cancel.clone(), ..Default::default() })?;
             Ok((w, run, measured))
         })
         .collect::<Result<_, MeshError>>()?;

@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use meshlod_engine::features::W_CLASSES;
-use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
+use meshlod_engine::hausdorff::{HausdorffOptions, HausdorffReport, hausdorff};
 use meshlod_engine::io::{read_mesh, write_mesh};
 use meshlod_engine::pm_format::{encode, read_pm};
 use meshlod_engine::refine::{RefineMode, RefineOptions, refine};
@@ -45,27 +45,23 @@ enum Command {
         #[arg(long)]
         clean: bool,
     },
-    /// Symmetric Metro-style Hausdorff distance between two meshes (units relative to A).
+    /// Symmetric Hausdorff distance between two meshes, with certified lower and upper bounds
+    /// (units relative to A).
     Hausdorff {
         /// Reference mesh A (its bounding box defines the units).
         a: PathBuf,
         /// Mesh B.
         b: PathBuf,
-        /// Edge and face samples per direction (default: the larger vertex count, at least 10000).
+        /// Relative gap allowed between the bounds: stop when upper ≤ lower · (1 + tolerance).
+        #[arg(long, default_value_t = HausdorffOptions::DEFAULT_TOLERANCE)]
+        tolerance: f64,
+        /// Face samples per direction for the area-weighted mean and RMS (default: the larger
+        /// vertex count, at least 10000).
         #[arg(long)]
         samples: Option<usize>,
         /// Seed of the face sampler.
         #[arg(long, default_value_t = HausdorffOptions::default().seed)]
         seed: u64,
-        /// Do not sample vertices.
-        #[arg(long)]
-        no_vertex_samples: bool,
-        /// Do not sample edges.
-        #[arg(long)]
-        no_edge_samples: bool,
-        /// Do not sample faces.
-        #[arg(long)]
-        no_face_samples: bool,
         /// Print one JSON object instead of text.
         #[arg(long)]
         json: bool,
@@ -285,6 +281,7 @@ pub(crate) fn refine_report(args: &RefineArgs) -> Result<serde_json::Value> {
         let d = hausdorff(&reference_mesh, &result.mesh, &HausdorffOptions::default())?;
         report["reference_mean"] = json!(d.mean);
         report["reference_max"] = json!(d.hausdorff);
+        report["reference_max_lower"] = json!(d.hausdorff_lower);
         report["reference_mean_diag_pct"] = json!(d.mean_diag_pct);
         report["reference_max_diag_pct"] = json!(d.hausdorff_diag_pct);
     }
@@ -448,7 +445,10 @@ pub(crate) fn run_simplify(args: SimplifyArgs) -> Result<()> {
             report["seconds"].as_f64().unwrap_or(0.0)
         );
         if let Some(h) = report.get("hausdorff") {
-            println!("hausdorff {h} paper units, mean {}", report["mean"]);
+            println!(
+                "hausdorff ≤ {} paper units (≥ {}, certified), mean {}",
+                h, report["hausdorff_lower"], report["mean"]
+            );
         }
         if let Some(b) = report.get("pm_bytes") {
             println!("progressive mesh: {b} bytes, {} bytes per split", report["bytes_per_split"]);
@@ -523,13 +523,47 @@ pub(crate) fn simplify_report(args: &SimplifyArgs) -> Result<serde_json::Value> 
             Some(d) => d,
             None => hausdorff(&mesh, &result.mesh, &HausdorffOptions::default())?,
         };
-        report["hausdorff"] = json!(d.hausdorff);
-        report["mean"] = json!(d.mean);
-        report["rms"] = json!(d.rms);
-        report["hausdorff_diag_pct"] = json!(d.hausdorff_diag_pct);
-        report["samples"] = json!(d.samples);
+        for (key, value) in hausdorff_json(&d) {
+            report[key] = value;
+        }
     }
     Ok(report)
+}
+
+/// The Hausdorff figures every JSON report carries, under the same keys (paper units unless named).
+pub(crate) fn hausdorff_json(d: &HausdorffReport) -> Vec<(&'static str, serde_json::Value)> {
+    vec![
+        ("hausdorff", json!(d.hausdorff)),
+        ("hausdorff_lower", json!(d.hausdorff_lower)),
+        ("hausdorff_tolerance", json!(d.tolerance)),
+        ("hausdorff_converged", json!(d.converged)),
+        ("hausdorff_diag_pct", json!(d.hausdorff_diag_pct)),
+        ("mean", json!(d.mean)),
+        ("rms", json!(d.rms)),
+        ("samples", json!(d.samples)),
+    ]
+}
+
+/// `meshlod hausdorff` in text: the certified figure first, then how it was obtained.
+fn print_hausdorff(r: &HausdorffReport) {
+    println!(
+        "hausdorff {:.6} paper units ({:.4}% of the diagonal, {:.6e} absolute): certified upper bound; \
+         lower bound {:.6} ({})",
+        r.hausdorff,
+        r.hausdorff_diag_pct,
+        r.hausdorff_absolute,
+        r.hausdorff_lower,
+        if r.converged {
+            format!("within the tolerance {}", r.tolerance)
+        } else {
+            format!("the work budget ran out before the tolerance {} was met", r.tolerance)
+        }
+    );
+    println!(
+        "  a → b: [{:.6}, {:.6}]   b → a: [{:.6}, {:.6}]",
+        r.a_to_b.max_lower, r.a_to_b.max_upper, r.b_to_a.max_lower, r.b_to_a.max_upper
+    );
+    println!("  mean {:.6}, rms {:.6} (area-weighted, {} face samples); {:.3} s", r.mean, r.rms, r.samples, r.seconds);
 }
 
 fn run_lod(
@@ -627,30 +661,14 @@ pub fn run(cli: Cli) -> Result<()> {
             }
             write_mesh(&output, &mesh)?;
         }
-        Command::Hausdorff { a, b, samples, seed, no_vertex_samples, no_edge_samples, no_face_samples, json } => {
-            if samples == Some(0) {
-                bail!("--samples must be at least 1");
-            }
+        Command::Hausdorff { a, b, tolerance, samples, seed, json } => {
             let (mesh_a, mesh_b) = (load(&a)?, load(&b)?);
-            let started = Instant::now();
-            let options = HausdorffOptions {
-                samples,
-                seed,
-                sample_vertices: !no_vertex_samples,
-                sample_edges: !no_edge_samples,
-                sample_faces: !no_face_samples,
-            };
+            let options = HausdorffOptions { samples, seed, tolerance, cancel: None };
             let report = hausdorff(&mesh_a, &mesh_b, &options)?;
-            let seconds = started.elapsed().as_secs_f64();
             if json {
-                let mut value = serde_json::to_value(report)?;
-                value["seconds"] = json!(seconds);
-                println!("{}", serde_json::to_string_pretty(&value)?);
+                println!("{}", serde_json::to_string_pretty(&report)?);
             } else {
-                println!(
-                    "hausdorff {:.6} paper units ({:.4}% of diagonal), mean {:.6}, rms {:.6}, {} samples, {:.3} s",
-                    report.hausdorff, report.hausdorff_diag_pct, report.mean, report.rms, report.samples, seconds
-                );
+                print_hausdorff(&report);
             }
         }
         Command::Generate { shape, output, resolution } => {

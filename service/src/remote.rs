@@ -255,8 +255,13 @@ pub(crate) async fn remote_simplify(
     });
     if let Some(h) = response.hausdorff {
         report["hausdorff"] = json!(h.hausdorff);
-        report["mean"] = json!(h.mean);
+        report["hausdorff_lower"] = json!(h.hausdorff_lower);
+        report["hausdorff_tolerance"] = json!(h.tolerance);
+        report["hausdorff_converged"] = json!(h.converged);
         report["hausdorff_diag_pct"] = json!(h.hausdorff_diag_pct);
+        report["mean"] = json!(h.mean);
+        report["rms"] = json!(h.rms);
+        report["samples"] = json!(h.samples);
     }
     Ok(report)
 }

@@ -251,7 +251,8 @@ fn run_simplify(
         let d = match measured {
             Some(d) => d,
             None => {
-                hausdorff(&mesh, &result.mesh, &HausdorffOptions::default()).map_err(|e| engine_status(e, "options"))?
+                let options = HausdorffOptions { cancel: options.cancel.clone(), ..Default::default() };
+                hausdorff(&mesh, &result.mesh, &options).map_err(|e| engine_status(e, "options"))?
             }
         };
         Some(proto::HausdorffReport {
@@ -260,6 +261,9 @@ fn run_simplify(
             rms: d.rms,
             hausdorff_diag_pct: d.hausdorff_diag_pct,
             samples: d.samples as u64,
+            hausdorff_lower: d.hausdorff_lower,
+            tolerance: d.tolerance,
+            converged: d.converged,
         })
     } else {
         None

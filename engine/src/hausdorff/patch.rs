@@ -1,0 +1,233 @@
+//! The patch bound: an upper bound of max over a piece T of d(·, B) from a whole patch of B's
+//! triangles at once, for pieces that no single triangle of B covers (a coarse triangle over a
+//! fine surface, or a piece straddling an edge of B in a flat region).
+//!
+//! Project along T's normal n. If the projections of a set S of B's triangles cover T's
+//! projection, every point p of T has a point q on some t in S with the same projection, so
+//! d(p, B) ≤ |p − q| = |height of q above T's plane|. Height is affine over t, so it is at most
+//! t's largest vertex height, and at most the largest height of t's plane over T's corners. Hence
+//! max over T of d(·, B) ≤ max over t in S of the smaller of the two.
+//!
+//! Coverage of T by the union of the projected triangles is proved without building the union:
+//! (1) each corner of T lies in some projected triangle of S; (2) no edge of T meets an edge of S
+//! that only one triangle of S uses (the union's boundary); (3) no such boundary vertex lies
+//! inside T. By (1) and (2) T's boundary stays inside the union; by (3) no hole of the union lies
+//! inside T. Touching or collinear edges count as meeting, so doubt makes the test fail, never
+//! pass.
+
+use glam::{DVec2, DVec3};
+
+use crate::bvh::TriangleBvh;
+
+/// Most triangles the box query may return before the bound is not tried.
+const MAX_QUERY: usize = 384;
+
+/// Scratch buffers reused across pieces of one worker.
+#[derive(Default)]
+pub(crate) struct Scratch {
+    slots: Vec<u32>,
+    kept: Vec<[DVec2; 3]>,
+    edges: Vec<(Key, Key, DVec2, DVec2)>,
+}
+
+/// A vertex by its position's bits: triangles that share a position share the vertex, so an
+/// unwelded seam is not taken for a boundary.
+type Key = [u32; 3];
+
+#[inline]
+fn key(p: DVec3) -> Key {
+    // Corners are f32 positions widened to f64: narrowing gives them back exactly.
+    [p.x as f32, p.y as f32, p.z as f32].map(f32::to_bits)
+}
+
+#[inline]
+fn cross(o: DVec2, a: DVec2, b: DVec2) -> f64 {
+    (a - o).perp_dot(b - o)
+}
+
+/// Whether closed segments ab and cd meet (touching and collinear overlap included).
+fn segments_meet(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
+    if a.max(b).cmplt(c.min(d)).any() || c.max(d).cmplt(a.min(b)).any() {
+        return false;
+    }
+    let (d1, d2) = (cross(a, b, c), cross(a, b, d));
+    let (d3, d4) = (cross(c, d, a), cross(c, d, b));
+    !((d1 > 0.0 && d2 > 0.0) || (d1 < 0.0 && d2 < 0.0) || (d3 > 0.0 && d4 > 0.0) || (d3 < 0.0 && d4 < 0.0))
+}
+
+/// Whether p lies in the counter-clockwise triangle abc, boundary included.
+#[inline]
+fn in_triangle(p: DVec2, [a, b, c]: [DVec2; 3]) -> bool {
+    cross(a, b, p) >= 0.0 && cross(b, c, p) >= 0.0 && cross(c, a, p) >= 0.0
+}
+
+/// Whether p lies strictly inside the counter-clockwise triangle abc.
+#[inline]
+fn strictly_in_triangle(p: DVec2, [a, b, c]: [DVec2; 3]) -> bool {
+    cross(a, b, p) > 0.0 && cross(b, c, p) > 0.0 && cross(c, a, p) > 0.0
+}
+
+/// The patch bound of the piece with `corners`, using B's triangles whose heights above the
+/// piece's plane are all below `limit` (a bound already known); `None` when coverage is not proved.
+pub(crate) fn patch_bound(bvh: &TriangleBvh, corners: &[DVec3; 3], limit: f64, scratch: &mut Scratch) -> Option<f64> {
+    let [c0, c1, c2] = *corners;
+    let normal = (c1 - c0).cross(c2 - c0);
+    let length = normal.length();
+    if !(length > 0.0) || !limit.is_finite() {
+        return None;
+    }
+    let n = normal / length;
+    let e1 = (c1 - c0).normalize();
+    let e2 = n.cross(e1);
+    let flat = |p: DVec3| {
+        let r = p - c0;
+        DVec2::new(r.dot(e1), r.dot(e2))
+    };
+    let t2 = [DVec2::ZERO, flat(c1), flat(c2)];
+    let (lo, hi) = (t2[0].min(t2[1]).min(t2[2]), t2[0].max(t2[1]).max(t2[2]));
+
+    scratch.slots.clear();
+    // Only triangles within `limit` of T's plane over T's footprint matter: the box of the prism
+    // T ± limit · n holds every one whose projection meets T's.
+    let lift = (n * limit).abs();
+    let box_min = c0.min(c1).min(c2) - lift;
+    let box_max = c0.max(c1).max(c2) + lift;
+    if !bvh.slots_in_box(box_min, box_max, MAX_QUERY, &mut scratch.slots) {
+        return None;
+    }
+    scratch.kept.clear();
+    scratch.edges.clear();
+    let mut bound = 0f64;
+    for &slot in &scratch.slots {
+        let q = bvh.slot_corners(slot);
+        let heights = q.map(|p| (p - c0).dot(n));
+        let p2 = q.map(flat);
+        if p2[0].min(p2[1]).min(p2[2]).cmpgt(hi).any() || p2[0].max(p2[1]).max(p2[2]).cmplt(lo).any() {
+            continue;
+        }
+        // Folded (seen from behind) or edge-on triangles are left out: the union of the rest is
+        // then smaller, which can only make the coverage test fail.
+        let area = cross(p2[0], p2[1], p2[2]);
+        if !(area > 0.0) {
+            continue;
+        }
+        // Over its own projection t's height is at most its largest vertex height; and, being
+        // affine, at most its plane's largest height over T's corners (|affine| is convex on T).
+        let at_vertices = heights.iter().fold(0f64, |m, h| m.max(h.abs()));
+        let at_corners = t2.iter().fold(0f64, |m, &x| {
+            let w = [cross(p2[1], p2[2], x), cross(p2[2], p2[0], x), cross(p2[0], p2[1], x)];
+            m.max(((w[0] * heights[0] + w[1] * heights[1] + w[2] * heights[2]) / area).abs())
+        });
+        let height = at_vertices.min(at_corners);
+        if !(height < limit) {
+            continue;
+        }
+        bound = bound.max(height);
+        scratch.kept.push(p2);
+        let v = q.map(key);
+        for k in 0..3 {
+            let (a, b) = (v[k], v[(k + 1) % 3]);
+            scratch.edges.push((a.min(b), a.max(b), p2[k], p2[(k + 1) % 3]));
+        }
+    }
+    // (1) Every corner of T in some kept triangle.
+    if !t2.iter().all(|&p| scratch.kept.iter().any(|&t| in_triangle(p, t))) {
+        return None;
+    }
+    // Boundary edges: used by one kept triangle only.
+    scratch.edges.sort_unstable_by_key(|e| (e.0, e.1));
+    let edges = &scratch.edges;
+    let mut i = 0;
+    while i < edges.len() {
+        let mut j = i + 1;
+        while j < edges.len() && (edges[j].0, edges[j].1) == (edges[i].0, edges[i].1) {
+            j += 1;
+        }
+        if j - i == 1 {
+            let (_, _, a, b) = edges[i];
+            // (2) and (3).
+            if (0..3).any(|k| segments_meet(t2[k], t2[(k + 1) % 3], a, b))
+                || strictly_in_triangle(a, t2)
+                || strictly_in_triangle(b, t2)
+            {
+                return None;
+            }
+        }
+        i = j;
+    }
+    Some(bound)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::Mesh;
+    use crate::procedural;
+
+    fn plane_grid(n: u32, z: f32) -> Mesh {
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        for i in 0..=n {
+            for j in 0..=n {
+                positions.push([i as f32 / n as f32, j as f32 / n as f32, z]);
+            }
+        }
+        for i in 0..n {
+            for j in 0..n {
+                let v = |a: u32, b: u32| a * (n + 1) + b;
+                triangles.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
+                triangles.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
+            }
+        }
+        Mesh::new(positions, triangles).unwrap()
+    }
+
+    #[test]
+    fn a_coarse_triangle_over_a_fine_parallel_grid_is_bounded_by_the_offset() {
+        let fine = plane_grid(10, 0.0);
+        let bvh = TriangleBvh::new(&fine).unwrap();
+        let piece = [DVec3::new(0.1, 0.1, 0.25), DVec3::new(0.9, 0.15, 0.25), DVec3::new(0.4, 0.85, 0.25)];
+        let bound = patch_bound(&bvh, &piece, 0.5, &mut Scratch::default()).unwrap();
+        assert!((bound - 0.25).abs() < 1e-7, "{bound}");
+        // Reaching past the grid's border: not covered.
+        let outside = [DVec3::new(0.5, 0.5, 0.25), DVec3::new(1.2, 0.5, 0.25), DVec3::new(0.5, 0.9, 0.25)];
+        assert_eq!(patch_bound(&bvh, &outside, 0.5, &mut Scratch::default()), None);
+    }
+
+    #[test]
+    fn a_hole_inside_the_piece_defeats_coverage() {
+        let mut grid = plane_grid(10, 0.0);
+        // Remove the two triangles of one cell in the middle of the piece.
+        grid.triangles.retain(|t| !(t.contains(&(5 * 11 + 5)) && t.contains(&(6 * 11 + 6))));
+        let bvh = TriangleBvh::new(&grid).unwrap();
+        let piece = [DVec3::new(0.2, 0.2, 0.1), DVec3::new(0.9, 0.3, 0.1), DVec3::new(0.3, 0.9, 0.1)];
+        assert_eq!(patch_bound(&bvh, &piece, 0.5, &mut Scratch::default()), None);
+    }
+
+    #[test]
+    fn the_bound_holds_at_every_sampled_point() {
+        // A piece above a bumpy surface: wherever the patch bound is proved, no point of the piece
+        // is farther from the surface than it says.
+        let surface = procedural::terrain(24, 5);
+        let bvh = TriangleBvh::new(&surface).unwrap();
+        let mut rng = crate::rng::SplitMix64::new(11);
+        let mut proved = 0;
+        for _ in 0..200 {
+            let mut r = || rng.next_f64() * 1.2 - 0.6;
+            let base = DVec3::new(r(), r(), 0.3 + 0.3 * r());
+            let corners =
+                [base, base + DVec3::new(0.3, 0.05 * r(), 0.1 * r()), base + DVec3::new(0.1 * r(), 0.3, 0.1 * r())];
+            let Some(bound) = patch_bound(&bvh, &corners, 0.8, &mut Scratch::default()) else { continue };
+            proved += 1;
+            for i in 0..=10 {
+                for j in 0..=10 - i {
+                    let (u, v) = (i as f64 / 10.0, j as f64 / 10.0);
+                    let p = corners[0] + (corners[1] - corners[0]) * u + (corners[2] - corners[0]) * v;
+                    let d = bvh.closest_point(p, None).distance();
+                    assert!(d <= bound + 1e-12, "{d} > {bound}");
+                }
+            }
+        }
+        assert!(proved > 100, "only {proved} of 200 pieces proved");
+    }
+}
