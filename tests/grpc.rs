@@ -91,7 +91,10 @@ async fn every_rpc_over_loopback() {
     let stats = response.stats.unwrap();
     assert_eq!(stats.stop_reason, "target_reached");
     assert_eq!(stats.w_source, proto::WSource::Given as i32);
-    assert!(response.hausdorff.unwrap().hausdorff > 0.0);
+    let h = response.hausdorff.unwrap();
+    assert!(h.hausdorff > 0.0 && h.converged);
+    // Certified bounds: the lower one is reached, the upper one within the tolerance of it.
+    assert!(h.hausdorff_lower <= h.hausdorff && h.hausdorff - h.hausdorff_lower <= h.tolerance * h.hausdorff_lower);
     let out = mesh_from_proto(response.mesh.as_ref().unwrap(), "mesh", &MeshLimits::default()).unwrap();
     assert_eq!(out.face_count() as u32, stats.faces_out);
     let pm = response.progressive.unwrap();
