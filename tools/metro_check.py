@@ -43,10 +43,10 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("meshlod")
     ap.add_argument("meshes")
-    ap.add_argument("--tolerance", type=float, default=0.03)
+    ap.add_argument("--tolerance", type=float, default=0.03, help="largest relative difference of the means")
     ap.add_argument("--sample-factor", type=int, default=4,
                     help="edge and face samples per direction = factor x the larger vertex count")
-    ap.add_argument("--dense-factor", type=int, default=25, help="factor of the retry when the first run is off")
+    ap.add_argument("--dense-factor", type=int, default=100, help="factor of the retry when the first run is off")
     ap.add_argument("--keep", type=float, nargs="+", default=[0.1, 0.5])
     ap.add_argument("--only", nargs="*", help="mesh names to check (default: all .obj files)")
     args = ap.parse_args()

@@ -135,12 +135,12 @@ fn bound(bvh: &TriangleBvh, piece: &Piece, extra: &[u32]) -> (f64, [u32; 2]) {
     }
     // Distance of each corner to each candidate.
     let mut d = [[0f64; CANDIDATES]; 3];
-    for i in 0..3 {
-        for j in 0..count {
-            d[i][j] = if piece.slot[i] == slots[j] {
+    for (i, row) in d.iter_mut().enumerate() {
+        for (cell, &slot) in row.iter_mut().zip(&slots[..count]) {
+            *cell = if piece.slot[i] == slot {
                 piece.distance[i]
             } else {
-                bvh.slot_distance_squared(piece.corners[i], slots[j]).sqrt()
+                bvh.slot_distance_squared(piece.corners[i], slot).sqrt()
             };
         }
     }
@@ -219,13 +219,16 @@ impl Found {
     }
 }
 
+/// Per vertex of A: exact distance to B and the closest B slot.
+pub(crate) type VertexDistances = Vec<(f64, u32)>;
+
 /// Exact distance to B and closest B slot of every vertex of A that a face uses (unused
 /// vertices get (0, 0)), and the largest of those distances. `None` when cancelled.
 pub(crate) fn vertex_distances(
     a: &Mesh,
     b: &TriangleBvh,
     cancelled: &(dyn Fn() -> bool + Sync),
-) -> Option<(Vec<(f64, u32)>, f64, usize)> {
+) -> Option<(VertexDistances, f64, usize)> {
     let mut used = vec![false; a.vertex_count()];
     for t in &a.triangles {
         for &v in t {

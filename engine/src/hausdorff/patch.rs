@@ -73,7 +73,7 @@ pub(crate) fn patch_bound(bvh: &TriangleBvh, corners: &[DVec3; 3], limit: f64, s
     let [c0, c1, c2] = *corners;
     let normal = (c1 - c0).cross(c2 - c0);
     let length = normal.length();
-    if !(length > 0.0) || !limit.is_finite() {
+    if length.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) || !limit.is_finite() {
         return None;
     }
     let n = normal / length;
@@ -108,7 +108,7 @@ pub(crate) fn patch_bound(bvh: &TriangleBvh, corners: &[DVec3; 3], limit: f64, s
         // Folded (seen from behind) or edge-on triangles are left out: the union of the rest is
         // then smaller, which can only make the coverage test fail.
         let area = cross(p2[0], p2[1], p2[2]);
-        if !(area > 0.0) {
+        if area.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             continue;
         }
         // Over its own projection t's height is at most its largest vertex height; and, being
@@ -119,7 +119,7 @@ pub(crate) fn patch_bound(bvh: &TriangleBvh, corners: &[DVec3; 3], limit: f64, s
             m.max(((w[0] * heights[0] + w[1] * heights[1] + w[2] * heights[2]) / area).abs())
         });
         let height = at_vertices.min(at_corners);
-        if !(height < limit) {
+        if height.partial_cmp(&limit) != Some(std::cmp::Ordering::Less) {
             continue;
         }
         bound = bound.max(height);
