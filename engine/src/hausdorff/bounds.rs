@@ -31,7 +31,7 @@ use std::collections::BinaryHeap;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::patch::{Scratch, patch_bound};
+use super::patch::{Scratch, patch_bound, query};
 use super::sampling::CHUNK;
 use crate::bvh::TriangleBvh;
 use crate::mesh::Mesh;
@@ -181,9 +181,9 @@ fn pair_bound(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 /// Tries the patch bound on a piece still above `threshold`.
-fn tighten(bvh: &TriangleBvh, piece: &mut Piece, threshold: f64, scratch: &mut Scratch) {
+fn tighten(bvh: &TriangleBvh, piece: &mut Piece, threshold: f64, candidates: Option<&[u32]>, scratch: &mut Scratch) {
     if piece.upper > threshold
-        && let Some(upper) = patch_bound(bvh, &piece.corners, piece.upper, scratch)
+        && let Some(upper) = patch_bound(bvh, &piece.corners, piece.upper, candidates, scratch)
         && upper < piece.upper
     {
         piece.upper = upper;
@@ -303,7 +303,6 @@ pub(crate) fn directed_bounds(
                     sequence: f as u64,
                 };
                 (piece.upper, piece.best) = bound(b, &piece, &[]);
-                tighten(b, &mut piece, start, scratch);
                 if piece.upper > start {
                     let centroid = (piece.corners[0] + piece.corners[1] + piece.corners[2]) / 3.0;
                     let (d, slot) = evaluate(b, centroid, piece.best[0]);
@@ -314,6 +313,7 @@ pub(crate) fn directed_bounds(
                         (piece.upper, piece.best) = (upper, best);
                     }
                 }
+                tighten(b, &mut piece, start, None, scratch);
                 found.offer(piece, start);
             }
             Some(found)
@@ -392,6 +392,9 @@ fn split(b: &TriangleBvh, piece: &Piece, threshold: f64, scratch: &mut Scratch) 
         [mid(2), mid(1), corner(2)],
         [mid(0), mid(1), mid(2)],
     ];
+    // One query of B for the parent serves its four children (same plane, smaller prisms).
+    let mut shared = std::mem::take(&mut scratch.shared);
+    let mut queried = None;
     for c in children {
         let mut child = Piece {
             corners: c.map(|x| x.0),
@@ -403,8 +406,14 @@ fn split(b: &TriangleBvh, piece: &Piece, threshold: f64, scratch: &mut Scratch) 
             sequence: 0,
         };
         (child.upper, child.best) = bound(b, &child, &piece.best);
-        tighten(b, &mut child, threshold, scratch);
+        if child.upper > threshold {
+            let ok = *queried.get_or_insert_with(|| query(b, &piece.corners, piece.upper, &mut shared));
+            if ok {
+                tighten(b, &mut child, threshold, Some(&shared), scratch);
+            }
+        }
         found.offer(child, threshold);
     }
+    scratch.shared = shared;
     found
 }

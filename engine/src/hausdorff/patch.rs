@@ -20,19 +20,33 @@ use glam::{DVec2, DVec3};
 use crate::bvh::TriangleBvh;
 
 /// Most triangles the box query may return before the bound is not tried.
-const MAX_QUERY: usize = 384;
+const MAX_QUERY: usize = 1024;
 
 /// Scratch buffers reused across pieces of one worker.
 #[derive(Default)]
 pub(crate) struct Scratch {
     slots: Vec<u32>,
     kept: Vec<[DVec2; 3]>,
-    edges: Vec<(Key, Key, DVec2, DVec2)>,
+    edges: Vec<Edge>,
+    /// A parent's query result, shared by its children (see [`Scratch::query`]).
+    pub(crate) shared: Vec<u32>,
 }
 
 /// A vertex by its position's bits: triangles that share a position share the vertex, so an
 /// unwelded seam is not taken for a boundary.
 type Key = [u32; 3];
+
+/// A kept triangle's edge: a hash of its two vertices (for sorting), the vertices themselves
+/// (to tell hash collisions apart) and its projected end points.
+type Edge = (u64, Key, Key, DVec2, DVec2);
+
+#[inline]
+fn mix(k: Key) -> u64 {
+    let mut h = (k[0] as u64) ^ ((k[1] as u64) << 32) ^ (k[2] as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    h ^= h >> 33;
+    h = h.wrapping_mul(0xFF51_AFD7_ED55_8CCD);
+    h ^ (h >> 33)
+}
 
 #[inline]
 fn key(p: DVec3) -> Key {
@@ -61,44 +75,75 @@ fn in_triangle(p: DVec2, [a, b, c]: [DVec2; 3]) -> bool {
     cross(a, b, p) >= 0.0 && cross(b, c, p) >= 0.0 && cross(c, a, p) >= 0.0
 }
 
+/// Whether an edge of the counter-clockwise triangle `a` has all of `b` strictly outside it.
+#[inline]
+fn separated(a: &[DVec2; 3], b: &[DVec2; 3]) -> bool {
+    (0..3).any(|k| b.iter().all(|&p| cross(a[k], a[(k + 1) % 3], p) < 0.0))
+}
+
 /// Whether p lies strictly inside the counter-clockwise triangle abc.
 #[inline]
 fn strictly_in_triangle(p: DVec2, [a, b, c]: [DVec2; 3]) -> bool {
     cross(a, b, p) > 0.0 && cross(b, c, p) > 0.0 && cross(c, a, p) > 0.0
 }
 
+/// The unit normal of a piece, if it has area.
+fn unit_normal([c0, c1, c2]: &[DVec3; 3]) -> Option<DVec3> {
+    let normal = (*c1 - *c0).cross(*c2 - *c0);
+    let length = normal.length();
+    (length > 0.0).then(|| normal / length)
+}
+
+/// Finds into `out` the slots of B that can matter to the patch bound of the piece with `corners`
+/// at `limit`, or to any part of it at a lower limit (a part has the same plane and a smaller
+/// prism). False when there are too many, or the piece has no area.
+pub(crate) fn query(bvh: &TriangleBvh, corners: &[DVec3; 3], limit: f64, out: &mut Vec<u32>) -> bool {
+    out.clear();
+    let Some(n) = unit_normal(corners).filter(|_| limit.is_finite()) else { return false };
+    let [c0, c1, c2] = *corners;
+    // Only triangles within `limit` of T's plane over T's footprint matter: the box of the prism
+    // T ± limit · n holds every one whose projection meets T's.
+    let lift = (n * limit).abs();
+    bvh.slots_in_box(c0.min(c1).min(c2) - lift, c0.max(c1).max(c2) + lift, MAX_QUERY, out)
+}
+
 /// The patch bound of the piece with `corners`, using B's triangles whose heights above the
 /// piece's plane are all below `limit` (a bound already known); `None` when coverage is not proved.
-pub(crate) fn patch_bound(bvh: &TriangleBvh, corners: &[DVec3; 3], limit: f64, scratch: &mut Scratch) -> Option<f64> {
-    let [c0, c1, c2] = *corners;
-    let normal = (c1 - c0).cross(c2 - c0);
-    let length = normal.length();
-    if length.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) || !limit.is_finite() {
-        return None;
-    }
-    let n = normal / length;
+/// `candidates`: the result of [`query`] for this piece or a piece containing it with a limit at
+/// least `limit`; `None` to query here.
+pub(crate) fn patch_bound(
+    bvh: &TriangleBvh,
+    corners: &[DVec3; 3],
+    limit: f64,
+    candidates: Option<&[u32]>,
+    scratch: &mut Scratch,
+) -> Option<f64> {
+    let [c0, c1, _] = *corners;
+    let n = unit_normal(corners).filter(|_| limit.is_finite())?;
     let e1 = (c1 - c0).normalize();
     let e2 = n.cross(e1);
     let flat = |p: DVec3| {
         let r = p - c0;
         DVec2::new(r.dot(e1), r.dot(e2))
     };
-    let t2 = [DVec2::ZERO, flat(c1), flat(c2)];
+    let t2 = [DVec2::ZERO, flat(c1), flat(corners[2])];
     let (lo, hi) = (t2[0].min(t2[1]).min(t2[2]), t2[0].max(t2[1]).max(t2[2]));
 
-    scratch.slots.clear();
-    // Only triangles within `limit` of T's plane over T's footprint matter: the box of the prism
-    // T ± limit · n holds every one whose projection meets T's.
-    let lift = (n * limit).abs();
-    let box_min = c0.min(c1).min(c2) - lift;
-    let box_max = c0.max(c1).max(c2) + lift;
-    if !bvh.slots_in_box(box_min, box_max, MAX_QUERY, &mut scratch.slots) {
-        return None;
-    }
+    let mut own = std::mem::take(&mut scratch.slots);
+    let slots = match candidates {
+        Some(c) => c,
+        None => {
+            if !query(bvh, corners, limit, &mut own) {
+                scratch.slots = own;
+                return None;
+            }
+            &own[..]
+        }
+    };
     scratch.kept.clear();
     scratch.edges.clear();
     let mut bound = 0f64;
-    for &slot in &scratch.slots {
+    for &slot in slots {
         let q = bvh.slot_corners(slot);
         let heights = q.map(|p| (p - c0).dot(n));
         let p2 = q.map(flat);
@@ -109,6 +154,12 @@ pub(crate) fn patch_bound(bvh: &TriangleBvh, corners: &[DVec3; 3], limit: f64, s
         // then smaller, which can only make the coverage test fail.
         let area = cross(p2[0], p2[1], p2[2]);
         if area.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+            continue;
+        }
+        // Triangles whose projection does not meet T's (an edge of either separates them) are
+        // left out too: their edges cannot meet T, so leaving them out changes no verdict, but
+        // their heights would loosen the bound.
+        if separated(&t2, &p2) || separated(&p2, &t2) {
             continue;
         }
         // Over its own projection t's height is at most its largest vertex height; and, being
@@ -127,28 +178,32 @@ pub(crate) fn patch_bound(bvh: &TriangleBvh, corners: &[DVec3; 3], limit: f64, s
         let v = q.map(key);
         for k in 0..3 {
             let (a, b) = (v[k], v[(k + 1) % 3]);
-            scratch.edges.push((a.min(b), a.max(b), p2[k], p2[(k + 1) % 3]));
+            let (a, b) = (a.min(b), a.max(b));
+            scratch.edges.push((mix(a) ^ mix(b).rotate_left(17), a, b, p2[k], p2[(k + 1) % 3]));
         }
     }
+    scratch.slots = own;
     // (1) Every corner of T in some kept triangle.
     if !t2.iter().all(|&p| scratch.kept.iter().any(|&t| in_triangle(p, t))) {
         return None;
     }
     // Boundary edges: used by one kept triangle only.
-    scratch.edges.sort_unstable_by_key(|e| (e.0, e.1));
+    scratch.edges.sort_unstable_by_key(|e| e.0);
     let edges = &scratch.edges;
     let mut i = 0;
     while i < edges.len() {
         let mut j = i + 1;
-        while j < edges.len() && (edges[j].0, edges[j].1) == (edges[i].0, edges[i].1) {
+        while j < edges.len() && edges[j].0 == edges[i].0 {
             j += 1;
         }
-        if j - i == 1 {
-            let (_, _, a, b) = edges[i];
+        // Within a run of equal hashes, an edge is a boundary edge when no other has its vertices.
+        for e in &edges[i..j] {
+            let shared = edges[i..j].iter().filter(|f| (f.1, f.2) == (e.1, e.2)).count() > 1;
             // (2) and (3).
-            if (0..3).any(|k| segments_meet(t2[k], t2[(k + 1) % 3], a, b))
-                || strictly_in_triangle(a, t2)
-                || strictly_in_triangle(b, t2)
+            if !shared
+                && ((0..3).any(|k| segments_meet(t2[k], t2[(k + 1) % 3], e.3, e.4))
+                    || strictly_in_triangle(e.3, t2)
+                    || strictly_in_triangle(e.4, t2))
             {
                 return None;
             }
@@ -187,11 +242,11 @@ mod tests {
         let fine = plane_grid(10, 0.0);
         let bvh = TriangleBvh::new(&fine).unwrap();
         let piece = [DVec3::new(0.1, 0.1, 0.25), DVec3::new(0.9, 0.15, 0.25), DVec3::new(0.4, 0.85, 0.25)];
-        let bound = patch_bound(&bvh, &piece, 0.5, &mut Scratch::default()).unwrap();
+        let bound = patch_bound(&bvh, &piece, 0.5, None, &mut Scratch::default()).unwrap();
         assert!((bound - 0.25).abs() < 1e-7, "{bound}");
         // Reaching past the grid's border: not covered.
         let outside = [DVec3::new(0.5, 0.5, 0.25), DVec3::new(1.2, 0.5, 0.25), DVec3::new(0.5, 0.9, 0.25)];
-        assert_eq!(patch_bound(&bvh, &outside, 0.5, &mut Scratch::default()), None);
+        assert_eq!(patch_bound(&bvh, &outside, 0.5, None, &mut Scratch::default()), None);
     }
 
     #[test]
@@ -201,7 +256,7 @@ mod tests {
         grid.triangles.retain(|t| !(t.contains(&(5 * 11 + 5)) && t.contains(&(6 * 11 + 6))));
         let bvh = TriangleBvh::new(&grid).unwrap();
         let piece = [DVec3::new(0.2, 0.2, 0.1), DVec3::new(0.9, 0.3, 0.1), DVec3::new(0.3, 0.9, 0.1)];
-        assert_eq!(patch_bound(&bvh, &piece, 0.5, &mut Scratch::default()), None);
+        assert_eq!(patch_bound(&bvh, &piece, 0.5, None, &mut Scratch::default()), None);
     }
 
     #[test]
@@ -217,7 +272,7 @@ mod tests {
             let base = DVec3::new(r(), r(), 0.3 + 0.3 * r());
             let corners =
                 [base, base + DVec3::new(0.3, 0.05 * r(), 0.1 * r()), base + DVec3::new(0.1 * r(), 0.3, 0.1 * r())];
-            let Some(bound) = patch_bound(&bvh, &corners, 0.8, &mut Scratch::default()) else { continue };
+            let Some(bound) = patch_bound(&bvh, &corners, 0.8, None, &mut Scratch::default()) else { continue };
             proved += 1;
             for i in 0..=10 {
                 for j in 0..=10 - i {
