@@ -139,14 +139,27 @@ impl TriangleBvh {
         self.corners[slot as usize].map(widen)
     }
 
-    /// Appends to `out` the slots whose triangle's bounding box meets the box `[min, max]`; stops
-    /// and returns false once `out` holds more than `limit` slots.
-    pub fn slots_in_box(&self, min: DVec3, max: DVec3, limit: usize, out: &mut Vec<u32>) -> bool {
+    /// Appends to `out` the slots whose triangle's bounding box meets the box `[min, max]` and
+    /// the slab `{x : |normal · x − offset| ≤ half}` (`normal` of unit length); stops and returns
+    /// false once `out` holds more than `limit` slots.
+    pub fn slots_in_box(
+        &self,
+        min: DVec3,
+        max: DVec3,
+        slab: (DVec3, f64, f64),
+        limit: usize,
+        out: &mut Vec<u32>,
+    ) -> bool {
         let mut stack: [u32; 64] = [0; 64];
         let mut depth = 1;
+        let (normal, offset, half) = slab;
         let overlaps = |lo: [f32; 3], hi: [f32; 3]| {
             let (lo, hi) = (widen(lo), widen(hi));
-            lo.cmple(max).all() && hi.cmpge(min).all()
+            // A box meets the slab when its projection on the normal does.
+            let (center, extent) = ((lo + hi) * 0.5, (hi - lo) * 0.5);
+            lo.cmple(max).all()
+                && hi.cmpge(min).all()
+                && (normal.dot(center) - offset).abs() <= half + extent.dot(normal.abs())
         };
         while depth > 0 {
             depth -= 1;

@@ -55,8 +55,8 @@ enum Command {
         /// Relative gap allowed between the bounds: stop when upper ≤ lower · (1 + tolerance).
         #[arg(long, default_value_t = HausdorffOptions::DEFAULT_TOLERANCE)]
         tolerance: f64,
-        /// Face samples per direction for the area-weighted mean and RMS (default: the larger
-        /// vertex count, at least 10000).
+        /// Face samples per direction for the area-weighted mean and RMS (default: half the
+        /// larger vertex count, at least 10000).
         #[arg(long)]
         samples: Option<usize>,
         /// Seed of the face sampler.
@@ -170,7 +170,8 @@ pub(crate) struct SimplifyArgs {
     pub(crate) max_normal_change: f64,
     /// Distance guard: each collapse also pays for the distance it opens between the result and
     /// the input, measured both ways. Lower Hausdorff distance on most meshes (a thin tip is no
-    /// longer shortened for free) at about 12× the time. `--guard` alone is weight 1; 0 is off.
+    /// longer shortened for free) at several times the cost (docs/simplify-report.md, Table 1b).
+    /// `--guard` alone is weight 1; 0 is off.
     #[arg(long, value_name = "WEIGHT", num_args = 0..=1, default_missing_value = "1", default_value_t = 0.0)]
     pub(crate) guard: f64,
     /// Also write the progressive mesh (base + vertex splits) to this .pm file.

@@ -124,7 +124,10 @@ const CANDIDATES: usize = 6;
 /// side is convex too: the bound is min over λ of max over corners, a one-dimensional linear
 /// programme. It is exact where the farthest point is equidistant from two planes (a piece
 /// straddling the medial axis of a ridge), where any single triangle is off by the piece's size.
-fn bound(bvh: &TriangleBvh, piece: &Piece, extra: &[u32]) -> (f64, [u32; 2]) {
+///
+/// Stops at the first candidate whose bound is at most `enough` (a distance already reached:
+/// a smaller bound would change nothing).
+fn bound(bvh: &TriangleBvh, piece: &Piece, extra: &[u32], enough: f64) -> (f64, [u32; 2]) {
     let mut slots = [u32::MAX; CANDIDATES];
     let mut count = 0;
     for &s in piece.slot.iter().chain(extra) {
@@ -133,27 +136,28 @@ fn bound(bvh: &TriangleBvh, piece: &Piece, extra: &[u32]) -> (f64, [u32; 2]) {
             count += 1;
         }
     }
-    // Distance of each corner to each candidate.
-    let mut d = [[0f64; CANDIDATES]; 3];
-    for (i, row) in d.iter_mut().enumerate() {
-        for (cell, &slot) in row.iter_mut().zip(&slots[..count]) {
+    // Distance of each corner to each candidate, a column at a time; single candidates first.
+    let mut d = [[0f64; 3]; CANDIDATES];
+    let mut best = (f64::INFINITY, [u32::MAX; 2]);
+    for (column, &slot) in d.iter_mut().zip(&slots[..count]) {
+        for (i, cell) in column.iter_mut().enumerate() {
             *cell = if piece.slot[i] == slot {
                 piece.distance[i]
             } else {
                 bvh.slot_distance_squared(piece.corners[i], slot).sqrt()
             };
         }
-    }
-    let mut best = (f64::INFINITY, [u32::MAX; 2]);
-    for j in 0..count {
-        let worst = d[0][j].max(d[1][j]).max(d[2][j]);
+        let worst = column[0].max(column[1]).max(column[2]);
         if worst < best.0 {
-            best = (worst, [slots[j], u32::MAX]);
+            best = (worst, [slot, u32::MAX]);
+            if worst <= enough {
+                return best;
+            }
         }
     }
     for j in 0..count {
         for k in j + 1..count {
-            let value = pair_bound([d[0][j], d[1][j], d[2][j]], [d[0][k], d[1][k], d[2][k]]);
+            let value = pair_bound(d[j], d[k]);
             if value < best.0 {
                 best = (value, [slots[j], slots[k]]);
             }
@@ -302,13 +306,13 @@ pub(crate) fn directed_bounds(
                     depth: 0,
                     sequence: f as u64,
                 };
-                (piece.upper, piece.best) = bound(b, &piece, &[]);
+                (piece.upper, piece.best) = bound(b, &piece, &[], lower);
                 if piece.upper > start {
                     let centroid = (piece.corners[0] + piece.corners[1] + piece.corners[2]) / 3.0;
                     let (d, slot) = evaluate(b, centroid, piece.best[0]);
                     found.evaluations += 1;
                     found.lower = found.lower.max(d);
-                    let (upper, best) = bound(b, &piece, &[slot, piece.best[0], piece.best[1]]);
+                    let (upper, best) = bound(b, &piece, &[slot, piece.best[0], piece.best[1]], lower);
                     if upper < piece.upper {
                         (piece.upper, piece.best) = (upper, best);
                     }
@@ -342,7 +346,7 @@ pub(crate) fn directed_bounds(
         let limit = threshold(lower);
         let found = batch
             .par_iter()
-            .map_init(Scratch::default, |scratch, piece| split(b, piece, limit, scratch))
+            .map_init(Scratch::default, |scratch, piece| split(b, piece, lower, limit, scratch))
             .reduce(Found::default, Found::merge);
         own = own.max(found.lower);
         lower = lower.max(found.lower);
@@ -366,7 +370,7 @@ pub(crate) fn directed_bounds(
 }
 
 /// Splits a piece 1 → 4 at its edge midpoints, each evaluated exactly.
-fn split(b: &TriangleBvh, piece: &Piece, threshold: f64, scratch: &mut Scratch) -> Found {
+fn split(b: &TriangleBvh, piece: &Piece, lower: f64, threshold: f64, scratch: &mut Scratch) -> Found {
     let mut found = Found::default();
     if piece.depth >= MAX_DEPTH {
         // Too small to split: its bound stands as it is.
@@ -405,7 +409,7 @@ fn split(b: &TriangleBvh, piece: &Piece, threshold: f64, scratch: &mut Scratch) 
             depth: piece.depth + 1,
             sequence: 0,
         };
-        (child.upper, child.best) = bound(b, &child, &piece.best);
+        (child.upper, child.best) = bound(b, &child, &piece.best, lower);
         if child.upper > threshold {
             let ok = *queried.get_or_insert_with(|| query(b, &piece.corners, piece.upper, &mut shared));
             if ok {

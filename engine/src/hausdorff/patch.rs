@@ -104,7 +104,7 @@ pub(crate) fn query(bvh: &TriangleBvh, corners: &[DVec3; 3], limit: f64, out: &m
     // Only triangles within `limit` of T's plane over T's footprint matter: the box of the prism
     // T ± limit · n holds every one whose projection meets T's.
     let lift = (n * limit).abs();
-    bvh.slots_in_box(c0.min(c1).min(c2) - lift, c0.max(c1).max(c2) + lift, MAX_QUERY, out)
+    bvh.slots_in_box(c0.min(c1).min(c2) - lift, c0.max(c1).max(c2) + lift, (n, n.dot(c0), limit), MAX_QUERY, out)
 }
 
 /// The patch bound of the piece with `corners`, using B's triangles whose heights above the

@@ -65,30 +65,37 @@ pub fn sample_surface(mesh: &Mesh, n: usize, kinds: SampleKinds, seed: u64) -> V
             }
         }
     }
-    if kinds.faces && n > 0 {
-        let total = mesh.area();
-        if total > 0.0 {
-            let per_area = n as f64 / total;
-            let mut rng = SplitMix64::new(seed);
-            let mut carry = 0.0;
-            for f in 0..mesh.face_count() {
-                carry += mesh.face_area(f) * per_area;
-                let k = carry.floor();
-                carry -= k;
-                let [a, b, c] = mesh.triangle_points(f);
-                for _ in 0..k as usize {
-                    // Uniform point in a triangle: fold the unit square along its diagonal.
-                    let (mut u, mut v) = (rng.next_f64(), rng.next_f64());
-                    if u + v > 1.0 {
-                        u = 1.0 - u;
-                        v = 1.0 - v;
-                    }
-                    samples.push(a + (b - a) * u + (c - a) * v);
-                }
-            }
-        }
+    if kinds.faces {
+        face_samples(mesh, n, seed, &mut samples);
     }
     samples
+}
+
+/// Appends `n` points spread over the faces by area (each face gets its share, carried over), at
+/// uniformly random barycentric positions.
+fn face_samples(mesh: &Mesh, n: usize, seed: u64, samples: &mut Vec<DVec3>) {
+    let total = mesh.area();
+    if n == 0 || total <= 0.0 {
+        return;
+    }
+    let per_area = n as f64 / total;
+    let mut rng = SplitMix64::new(seed);
+    let mut carry = 0.0;
+    for f in 0..mesh.face_count() {
+        carry += mesh.face_area(f) * per_area;
+        let k = carry.floor();
+        carry -= k;
+        let [a, b, c] = mesh.triangle_points(f);
+        for _ in 0..k as usize {
+            // Uniform point in a triangle: fold the unit square along its diagonal.
+            let (mut u, mut v) = (rng.next_f64(), rng.next_f64());
+            if u + v > 1.0 {
+                u = 1.0 - u;
+                v = 1.0 - v;
+            }
+            samples.push(a + (b - a) * u + (c - a) * v);
+        }
+    }
 }
 
 /// Distances from sample points to a surface: the largest (a lower bound of the one-sided
