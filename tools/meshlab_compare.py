@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """meshlod simplify vs MeshLab's quadric edge collapse (pymeshlab defaults) at the same face count.
 
-Both results are measured with the same instrument (`meshlod hausdorff`, symmetric, paper units)
+Both results are measured with the same instrument (`meshlod hausdorff`: the certified upper bound of the
+symmetric distance, paper units)
 against the cleaned original. Prints a Markdown table.
 
 Each --guard weight gives meshlod a column (0: no distance guard); MeshLab's face count follows
