@@ -490,3 +490,44 @@ async fn health_reflection_and_token() {
     assert!(client.simplify(request).await.is_ok());
     server.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn hausdorff_rpc_brackets_refuses_and_cancels() {
+    let metrics_port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap();
+    let server = TestServer::start(ServerConfig { metrics_listen: Some(metrics_port), ..Default::default() }).await;
+    let metrics = server.metrics.unwrap();
+    let mut client = server.client().await;
+    let mesh = blob();
+    let coarse = simplify(&mesh, &SimplifyOptions { target_ratio: Some(0.9), ..Default::default() }).unwrap().mesh;
+    let request =
+        |a: &Mesh, b: &Mesh| proto::HausdorffRequest { a: input(a), b: input(b), tolerance: None, samples: None };
+    // The same figures as the engine's, bounds within the default tolerance.
+    let report = client.hausdorff(request(&mesh, &coarse)).await.unwrap().into_inner();
+    let local = meshlod_engine::hausdorff::hausdorff(&mesh, &coarse, &Default::default()).unwrap();
+    assert_eq!((report.hausdorff, report.hausdorff_lower), (local.hausdorff, local.hausdorff_lower));
+    assert!(report.converged && report.hausdorff - report.hausdorff_lower <= 1e-3 * report.hausdorff_lower);
+
+    // Field paths, exactly.
+    let refused = |status: tonic::Status| (status.code(), status.message().split(':').next().unwrap().to_string());
+    let bad_tolerance = proto::HausdorffRequest { tolerance: Some(0.0), ..request(&mesh, &coarse) };
+    let status = client.hausdorff(bad_tolerance).await.unwrap_err();
+    assert_eq!(refused(status), (Code::InvalidArgument, "tolerance".to_string()));
+    let missing = proto::HausdorffRequest { b: None, ..request(&mesh, &coarse) };
+    assert_eq!(refused(client.hausdorff(missing).await.unwrap_err()), (Code::InvalidArgument, "b".to_string()));
+    let flat = Mesh::new(vec![[0., 0., 0.], [1., 0., 0.], [2., 0., 0.]], vec![[0, 1, 2]]).unwrap();
+    let status = client.hausdorff(request(&mesh, &flat)).await.unwrap_err();
+    assert_eq!(refused(status), (Code::InvalidArgument, "b".to_string()));
+
+    // A large pair under a short deadline: the call fails and the worker stops.
+    let (big, other) = (procedural::bumpy_blob(300, 600, 5), procedural::bumpy_blob(200, 400, 6));
+    let mut call = tonic::Request::new(request(&big, &other));
+    call.set_timeout(Duration::from_millis(300));
+    let code = client.hausdorff(call).await.unwrap_err().code();
+    assert!(matches!(code, Code::Cancelled | Code::DeadlineExceeded), "{code:?}");
+    let stopped = Instant::now();
+    while in_flight(metrics) != 0 {
+        assert!(stopped.elapsed() < Duration::from_secs(3), "cancelled measurement kept running");
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    server.stop().await;
+}

@@ -224,3 +224,34 @@ pub fn simplify_options(o: &proto::SimplifyOptions, w: f64) -> Result<SimplifyOp
         cancel: None,
     })
 }
+
+/// The proto report of a Hausdorff measurement.
+pub fn hausdorff_to_proto(d: &meshlod_engine::hausdorff::HausdorffReport) -> proto::HausdorffReport {
+    proto::HausdorffReport {
+        hausdorff: d.hausdorff,
+        mean: d.mean,
+        rms: d.rms,
+        hausdorff_diag_pct: d.hausdorff_diag_pct,
+        samples: d.samples as u64,
+        hausdorff_lower: d.hausdorff_lower,
+        tolerance: d.tolerance,
+        converged: d.converged,
+    }
+}
+
+/// Hausdorff options from a request, checked; errors name the request field.
+pub fn hausdorff_options(
+    tolerance: Option<f64>,
+    samples: Option<u32>,
+) -> Result<meshlod_engine::hausdorff::HausdorffOptions, Status> {
+    let options = meshlod_engine::hausdorff::HausdorffOptions {
+        tolerance: tolerance.unwrap_or(meshlod_engine::hausdorff::HausdorffOptions::DEFAULT_TOLERANCE),
+        samples: samples.map(|n| n as usize),
+        ..Default::default()
+    };
+    options.validate().map_err(|e| match e {
+        MeshError::InvalidParameter { name, reason } => invalid(name, reason),
+        other => invalid("request", other.to_string()),
+    })?;
+    Ok(options)
+}

@@ -14,6 +14,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 
+use meshlod_engine::MeshError;
 use meshlod_engine::features::W_CLASSES;
 use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
 use meshlod_engine::refine::{RefineMode, RefineOptions, refine};
@@ -255,16 +256,7 @@ fn run_simplify(
                 hausdorff(&mesh, &result.mesh, &options).map_err(|e| engine_status(e, "options"))?
             }
         };
-        Some(proto::HausdorffReport {
-            hausdorff: d.hausdorff,
-            mean: d.mean,
-            rms: d.rms,
-            hausdorff_diag_pct: d.hausdorff_diag_pct,
-            samples: d.samples as u64,
-            hausdorff_lower: d.hausdorff_lower,
-            tolerance: d.tolerance,
-            converged: d.converged,
-        })
+        Some(convert::hausdorff_to_proto(&d))
     } else {
         None
     };
@@ -425,6 +417,34 @@ impl MeshLod for MeshLodService {
             })
             .await?;
         Ok(Response::new(response))
+    }
+
+    async fn hausdorff(
+        &self,
+        request: Request<proto::HausdorffRequest>,
+    ) -> Result<Response<proto::HausdorffReport>, Status> {
+        let request = request.into_inner();
+        let limits = self.config.limits;
+        let report = self
+            .run("Hausdorff", move |cancel| {
+                let mut options = convert::hausdorff_options(request.tolerance, request.samples)?;
+                let a = mesh_from_input(request.a.as_ref(), "a", &limits)?;
+                let b = mesh_from_input(request.b.as_ref(), "b", &limits)?;
+                options.cancel = Some(cancel);
+                let d = hausdorff(&a, &b, &options).map_err(|e| match e {
+                    // The engine names the mesh ("mesh A has no faces", "mesh B" is degenerate).
+                    MeshError::Empty { what } => {
+                        Status::invalid_argument(format!("{}: {what}", if what.contains("mesh A") { "a" } else { "b" }))
+                    }
+                    MeshError::InvalidParameter { name, reason } if name.starts_with("mesh ") => {
+                        Status::invalid_argument(format!("{}: {reason}", if name == "mesh A" { "a" } else { "b" }))
+                    }
+                    other => engine_status(other, "request"),
+                })?;
+                Ok(convert::hausdorff_to_proto(&d))
+            })
+            .await?;
+        Ok(Response::new(report))
     }
 
     async fn predict(

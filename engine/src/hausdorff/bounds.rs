@@ -36,6 +36,8 @@ use super::sampling::CHUNK;
 use crate::bvh::TriangleBvh;
 use crate::mesh::Mesh;
 
+/// Faces per parallel task of the first pass.
+const FACE_CHUNK: usize = 128;
 /// Pieces split per parallel batch.
 const BATCH: usize = 256;
 /// A piece this many 1 → 4 splits below its face is not split further (its edges are then about
@@ -288,8 +290,10 @@ pub(crate) fn directed_bounds(
     // 2. Every face: its bound from its corners' candidates, then its centroid's if that is not enough.
     let start = threshold(lower);
     let faces: Vec<usize> = (0..a.face_count()).collect();
+    // Faces use no query hint from one another: small chunks keep both threads busy when one
+    // side is coarse (a few thousand faces, each costly).
     let found = faces
-        .par_chunks(CHUNK)
+        .par_chunks(FACE_CHUNK)
         .map_init(Scratch::default, |scratch, chunk| {
             if cancelled() {
                 return None;
