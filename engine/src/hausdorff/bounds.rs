@@ -290,10 +290,8 @@ pub(crate) fn directed_bounds(
     // 2. Every face: its bound from its corners' candidates, then its centroid's if that is not enough.
     let start = threshold(lower);
     let faces: Vec<usize> = (0..a.face_count()).collect();
-    // Faces use no query hint from one another: small chunks keep both threads busy when one
-    // side is coarse (a few thousand faces, each costly).
     let found = faces
-        .par_chunks(FACE_CHUNK)
+        .par_chunks(CHUNK)
         .map_init(Scratch::default, |scratch, chunk| {
             if cancelled() {
                 return None;
