@@ -36,8 +36,6 @@ use super::sampling::CHUNK;
 use crate::bvh::TriangleBvh;
 use crate::mesh::Mesh;
 
-/// Faces per parallel task of the first pass.
-const FACE_CHUNK: usize = 128;
 /// Pieces split per parallel batch.
 const BATCH: usize = 256;
 /// A piece this many 1 → 4 splits below its face is not split further (its edges are then about
