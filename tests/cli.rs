@@ -82,6 +82,11 @@ fn generate_info_convert_hausdorff_chain() {
     let (upper, lower) = (d["hausdorff"].as_f64().unwrap(), d["hausdorff_lower"].as_f64().unwrap());
     assert!(lower <= upper && upper - lower <= 1e-3 * lower, "[{lower}, {upper}]");
     assert_eq!(d["converged"], true);
+    // One direction on its own: its bounds meet too, and the symmetric figure is the larger one.
+    let one = ok_json(&["hausdorff", s(&obj), s(&coarse), "--json", "--directed"]);
+    let (one_upper, one_lower) = (one["max_upper"].as_f64().unwrap(), one["max_lower"].as_f64().unwrap());
+    assert!(one_lower <= one_upper && one_upper - one_lower <= 1e-3 * one_lower, "[{one_lower}, {one_upper}]");
+    assert!(one_upper <= upper * (1.0 + 1e-3) && one["direction"] == "a_to_b");
     let loose = ok_json(&["hausdorff", s(&obj), s(&coarse), "--json", "--tolerance", "0.1"]);
     let loose_upper = loose["hausdorff"].as_f64().unwrap();
     assert!(loose_upper >= lower && loose_upper <= 1.1 * loose["hausdorff_lower"].as_f64().unwrap());

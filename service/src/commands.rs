@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use meshlod_engine::features::W_CLASSES;
-use meshlod_engine::hausdorff::{HausdorffOptions, HausdorffReport, hausdorff};
+use meshlod_engine::hausdorff::{HausdorffOptions, HausdorffReport, directed_hausdorff, hausdorff};
 use meshlod_engine::io::{read_mesh, write_mesh};
 use meshlod_engine::pm_format::{encode, read_pm};
 use meshlod_engine::refine::{RefineMode, RefineOptions, refine};
@@ -62,6 +62,10 @@ enum Command {
         /// Seed of the face sampler.
         #[arg(long, default_value_t = HausdorffOptions::default().seed)]
         seed: u64,
+        /// Only the one-sided distance from A's surface to B's, its bounds met within the tolerance
+        /// (the symmetric search proves the smaller direction only below the larger one).
+        #[arg(long)]
+        directed: bool,
         /// Print one JSON object instead of text.
         #[arg(long)]
         json: bool,
@@ -662,9 +666,24 @@ pub fn run(cli: Cli) -> Result<()> {
             }
             write_mesh(&output, &mesh)?;
         }
-        Command::Hausdorff { a, b, tolerance, samples, seed, json } => {
+        Command::Hausdorff { a, b, tolerance, samples, seed, directed, json } => {
             let (mesh_a, mesh_b) = (load(&a)?, load(&b)?);
             let options = HausdorffOptions { samples, seed, tolerance, cancel: None };
+            if directed {
+                let d = directed_hausdorff(&mesh_a, &mesh_b, &options)?;
+                if json {
+                    let mut value = serde_json::to_value(d)?;
+                    value["direction"] = json!("a_to_b");
+                    value["tolerance"] = json!(tolerance);
+                    println!("{}", serde_json::to_string_pretty(&value)?);
+                } else {
+                    println!(
+                        "a → b: at most {:.6} paper units (certified), at least {:.6}; mean {:.6}, rms {:.6}",
+                        d.max_upper, d.max_lower, d.mean, d.rms
+                    );
+                }
+                return Ok(());
+            }
             let report = hausdorff(&mesh_a, &mesh_b, &options)?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
