@@ -528,15 +528,16 @@ pub(crate) fn simplify_report(args: &SimplifyArgs) -> Result<serde_json::Value> 
             Some(d) => d,
             None => hausdorff(&mesh, &result.mesh, &HausdorffOptions::default())?,
         };
-        for (key, value) in hausdorff_json(&d) {
+        for (key, value) in hausdorff_json(&meshlod_service::convert::hausdorff_to_proto(&d)) {
             report[key] = value;
         }
     }
     Ok(report)
 }
 
-/// The Hausdorff figures every JSON report carries, under the same keys (paper units unless named).
-pub(crate) fn hausdorff_json(d: &HausdorffReport) -> Vec<(&'static str, serde_json::Value)> {
+/// The Hausdorff figures every JSON report carries, local or from the server, under the same keys
+/// (paper units unless named).
+pub(crate) fn hausdorff_json(d: &meshlod_service::proto::HausdorffReport) -> Vec<(&'static str, serde_json::Value)> {
     vec![
         ("hausdorff", json!(d.hausdorff)),
         ("hausdorff_lower", json!(d.hausdorff_lower)),

@@ -254,14 +254,9 @@ pub(crate) async fn remote_simplify(
         "seconds": stats.seconds, "stop_reason": stats.stop_reason, "collapses": stats.collapses,
     });
     if let Some(h) = response.hausdorff {
-        report["hausdorff"] = json!(h.hausdorff);
-        report["hausdorff_lower"] = json!(h.hausdorff_lower);
-        report["hausdorff_tolerance"] = json!(h.tolerance);
-        report["hausdorff_converged"] = json!(h.converged);
-        report["hausdorff_diag_pct"] = json!(h.hausdorff_diag_pct);
-        report["mean"] = json!(h.mean);
-        report["rms"] = json!(h.rms);
-        report["samples"] = json!(h.samples);
+        for (key, value) in crate::commands::hausdorff_json(&h) {
+            report[key] = value;
+        }
     }
     Ok(report)
 }

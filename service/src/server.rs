@@ -14,9 +14,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 
-use meshlod_engine::MeshError;
 use meshlod_engine::features::W_CLASSES;
-use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
+use meshlod_engine::hausdorff::{HausdorffOptions, check_surface, hausdorff};
 use meshlod_engine::refine::{RefineMode, RefineOptions, refine};
 use meshlod_engine::simplify::{Metric, simplify, simplify_search_w};
 use tokio::net::TcpListener;
@@ -431,16 +430,11 @@ impl MeshLod for MeshLodService {
                 let a = mesh_from_input(request.a.as_ref(), "a", &limits)?;
                 let b = mesh_from_input(request.b.as_ref(), "b", &limits)?;
                 options.cancel = Some(cancel);
-                let d = hausdorff(&a, &b, &options).map_err(|e| match e {
-                    // The engine names the mesh ("mesh A has no faces", "mesh B" is degenerate).
-                    MeshError::Empty { what } => {
-                        Status::invalid_argument(format!("{}: {what}", if what.contains("mesh A") { "a" } else { "b" }))
-                    }
-                    MeshError::InvalidParameter { name, reason } if name.starts_with("mesh ") => {
-                        Status::invalid_argument(format!("{}: {reason}", if name == "mesh A" { "a" } else { "b" }))
-                    }
-                    other => engine_status(other, "request"),
-                })?;
+                // Each mesh checked on its own, so that the error names its field.
+                for (mesh, field) in [(&a, "a"), (&b, "b")] {
+                    check_surface(mesh).map_err(|e| Status::invalid_argument(format!("{field}: {e}")))?;
+                }
+                let d = hausdorff(&a, &b, &options).map_err(|e| engine_status(e, "request"))?;
                 Ok(convert::hausdorff_to_proto(&d))
             })
             .await?;

@@ -68,13 +68,6 @@ pub(crate) struct Bounds {
     pub converged: bool,
 }
 
-impl Bounds {
-    /// Bounds of a direction that was not searched: nothing proved.
-    pub fn unsearched() -> Bounds {
-        Bounds { own_lower: 0.0, upper: f64::INFINITY, evaluations: 0, splits: 0, converged: false }
-    }
-}
-
 /// A triangle of A or part of one, with the exact distance and closest B slot of each corner.
 #[derive(Debug, Clone, Copy)]
 struct Piece {
@@ -379,10 +372,9 @@ fn split(b: &TriangleBvh, piece: &Piece, lower: f64, threshold: f64, scratch: &m
     }
     let [p0, p1, p2] = piece.corners;
     let mids = [(p0 + p1) * 0.5, (p1 + p2) * 0.5, (p2 + p0) * 0.5];
-    let hints = [piece.slot[0], piece.slot[1], piece.slot[2]];
     let mut at_mid = [(0f64, 0u32); 3];
     for k in 0..3 {
-        at_mid[k] = evaluate(b, mids[k], hints[k]);
+        at_mid[k] = evaluate(b, mids[k], piece.slot[k]);
         found.lower = found.lower.max(at_mid[k].0);
     }
     found.evaluations = 3;

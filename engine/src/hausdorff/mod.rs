@@ -138,25 +138,41 @@ pub const NOISE_FLOOR: f64 = 1e-12;
 /// split along every edge of the other towards f32 rounding.
 pub const RESOLUTION: f64 = 1e-6;
 
+/// What [`measure`] prepares for one direction: the target's tree, the face-sample distances, and
+/// the vertices' distances with their largest and their count.
+type Prepared = (TriangleBvh, sampling::SampledDistance, (bounds::VertexDistances, f64, usize));
+
 /// Pieces the bound search may split per face of the measured side, beyond a fixed allowance,
 /// before it stops and reports the (still certified) wider bracket.
 const BUDGET_PER_FACE: usize = 32;
 const BUDGET_BASE: usize = 1 << 14;
 
-fn check(mesh: &Mesh, which: &'static str) -> Result<(), MeshError> {
+/// Checks that a mesh has a surface to measure: valid, with faces, not all of them degenerate.
+pub fn check_surface(mesh: &Mesh) -> Result<(), MeshError> {
     mesh.check()?;
     if mesh.triangles.is_empty() {
-        return Err(MeshError::Empty {
-            what: if which == "A" { "mesh A has no faces" } else { "mesh B has no faces" },
-        });
+        return Err(MeshError::Empty { what: "no faces" });
     }
     if mesh.area() <= 0.0 {
         return Err(MeshError::InvalidParameter {
-            name: if which == "A" { "mesh A" } else { "mesh B" },
+            name: "mesh",
             reason: "every face is degenerate (zero area): there is no surface to measure".into(),
         });
     }
     Ok(())
+}
+
+/// [`check_surface`] with the errors naming mesh A or B.
+fn check(mesh: &Mesh, is_a: bool) -> Result<(), MeshError> {
+    check_surface(mesh).map_err(|e| match e {
+        MeshError::Empty { .. } => {
+            MeshError::Empty { what: if is_a { "mesh A has no faces" } else { "mesh B has no faces" } }
+        }
+        MeshError::InvalidParameter { name: "mesh", reason } => {
+            MeshError::InvalidParameter { name: if is_a { "mesh A" } else { "mesh B" }, reason }
+        }
+        other => other,
+    })
 }
 
 /// Symmetric Hausdorff distance between `a` and `b` with certified bounds, and area-weighted mean
@@ -178,8 +194,8 @@ pub fn directed_hausdorff(a: &Mesh, b: &Mesh, options: &HausdorffOptions) -> Res
 fn measure(a: &Mesh, b: &Mesh, options: &HausdorffOptions, symmetric: bool) -> Result<HausdorffReport, MeshError> {
     let started = Instant::now();
     options.validate()?;
-    check(a, "A")?;
-    check(b, "B")?;
+    check(a, true)?;
+    check(b, false)?;
     let bounds_a = a.surface_bounds().expect("a has faces");
     let diagonal = bounds_a.diagonal().max(b.surface_bounds().expect("b has faces").diagonal());
     let n = options
@@ -196,56 +212,57 @@ fn measure(a: &Mesh, b: &Mesh, options: &HausdorffOptions, symmetric: bool) -> R
     // the rounding of the closest-point computation itself (a sample on a face measured against
     // the same face), so they count as exactly zero.
     let noise_floor = NOISE_FLOOR * diagonal;
-    let (bvh_a, bvh_b) =
-        rayon::join(|| TriangleBvh::new(a).expect("a has faces"), || TriangleBvh::new(b).expect("b has faces"));
     // First what is cheap and exact: every vertex, and the face samples of the mean and RMS.
-    let measure = |from: &Mesh, to: &TriangleBvh| {
+    let prepare = |from: &Mesh, to: &Mesh| {
+        let bvh = TriangleBvh::new(to).expect("checked: has faces");
         let samples = sample_surface(from, n, SampleKinds::FACES, options.seed);
         let (sampled, vertices) = rayon::join(
-            || directed_sampled(&samples, to, noise_floor, &cancelled),
-            || bounds::vertex_distances(from, to, &cancelled),
+            || directed_sampled(&samples, &bvh, noise_floor, &cancelled),
+            || bounds::vertex_distances(from, &bvh, &cancelled),
         );
-        Some((sampled?, vertices?))
+        Some((bvh, sampled?, vertices?))
     };
-    let (ab, ba) = rayon::join(|| measure(a, &bvh_b), || measure(b, &bvh_a));
-    let ((sampled_ab, (at_a, lower_ab, vertices_a)), (sampled_ba, (at_b, lower_ba, vertices_b))) =
-        (ab.ok_or(MeshError::Cancelled)?, ba.ok_or(MeshError::Cancelled)?);
+    // One-sided: B → A is not measured at all.
+    let (ab, ba) = rayon::join(|| prepare(a, b), || symmetric.then(|| prepare(b, a)));
+    let ab = ab.ok_or(MeshError::Cancelled)?;
+    let ba = ba.map(|x| x.ok_or(MeshError::Cancelled)).transpose()?;
     // The symmetric distance is at least the larger direction's: neither search needs to prove
     // anything below that.
-    let lower = if symmetric {
-        lower_ab.max(lower_ba).max(sampled_ab.max).max(sampled_ba.max)
-    } else {
-        lower_ab.max(sampled_ab.max)
-    };
-    let one_way = |from: &Mesh, to: &TriangleBvh, at: &[(f64, u32)]| {
-        bounds::directed_bounds(from, to, at, lower, search(from.face_count()), &cancelled)
-    };
-    // One-sided: B → A is only bounded loosely (a search with an infinite tolerance stops at once).
-    let (bounds_ab, bounds_ba) = rayon::join(
-        || one_way(a, &bvh_b, &at_a),
-        || if symmetric { one_way(b, &bvh_a, &at_b) } else { Some(bounds::Bounds::unsearched()) },
-    );
-    let (bounds_ab, bounds_ba) = (bounds_ab.ok_or(MeshError::Cancelled)?, bounds_ba.ok_or(MeshError::Cancelled)?);
-    let directed = |sampled: sampling::SampledDistance, own: f64, bounds: bounds::Bounds, vertices: usize| {
+    let reached = |(_, sampled, (_, lower, _)): &(TriangleBvh, sampling::SampledDistance, _)| sampled.max.max(*lower);
+    let lower = reached(&ab).max(ba.as_ref().map_or(0.0, reached));
+    let one_way = |from: &Mesh, prepared: &Prepared| {
+        let (bvh, sampled, (at_vertex, own, vertices)) = prepared;
+        let found = bounds::directed_bounds(from, bvh, at_vertex, lower, search(from.face_count()), &cancelled)
+            .ok_or(MeshError::Cancelled)?;
         // A direction's own lower bound is what was reached on its side; its upper bound is
-        // certified, and within the tolerance of the symmetric lower bound.
-        let own = own.max(sampled.max).max(bounds.own_lower);
-        // As for the samples: distances at the noise floor are the rounding of the closest-point
-        // computation on coincident surfaces, and count as zero.
+        // certified, and within the tolerance of the symmetric lower bound. As for the samples,
+        // distances at the noise floor are the rounding of the closest-point computation on
+        // coincident surfaces, and count as zero.
         let zero = |d: f64| if d <= noise_floor { 0.0 } else { d };
-        DirectedDistance {
-            max_lower: zero(own),
-            max_upper: zero(bounds.upper),
+        Ok::<_, MeshError>(DirectedDistance {
+            max_lower: zero(own.max(sampled.max).max(found.own_lower)),
+            max_upper: zero(found.upper),
             mean: sampled.mean,
             rms: sampled.rms,
             samples: sampled.samples,
-            evaluations: vertices + bounds.evaluations,
-            splits: bounds.splits,
-            converged: bounds.converged,
-        }
+            evaluations: vertices + found.evaluations,
+            splits: found.splits,
+            converged: found.converged,
+        })
     };
-    let a_to_b = directed(sampled_ab, lower_ab, bounds_ab, vertices_a);
-    let b_to_a = directed(sampled_ba, lower_ba, bounds_ba, vertices_b);
+    let (a_to_b, b_to_a) = rayon::join(|| one_way(a, &ab), || ba.as_ref().map(|ba| one_way(b, ba)).transpose());
+    let a_to_b = a_to_b?;
+    // One-sided: the missing direction contributes nothing to the symmetric figures.
+    let b_to_a = b_to_a?.unwrap_or(DirectedDistance {
+        max_lower: 0.0,
+        max_upper: 0.0,
+        mean: 0.0,
+        rms: 0.0,
+        samples: 0,
+        evaluations: 0,
+        splits: 0,
+        converged: true,
+    });
     let units = DistanceUnits::new(&bounds_a);
     let paper = |d: DirectedDistance| DirectedDistance {
         max_lower: units.to_paper(d.max_lower),
@@ -279,8 +296,8 @@ fn measure(a: &Mesh, b: &Mesh, options: &HausdorffOptions, symmetric: bool) -> R
 /// direction): only a lower bound of the distance, kept as the peer the certified bounds are
 /// measured against. Absolute units.
 pub fn sampled_max(a: &Mesh, b: &Mesh, n: usize, seed: u64) -> Result<f64, MeshError> {
-    check(a, "A")?;
-    check(b, "B")?;
+    check(a, true)?;
+    check(b, false)?;
     let diagonal = a.surface_bounds().expect("faces").diagonal();
     let (bvh_a, bvh_b) = rayon::join(|| TriangleBvh::new(a).expect("faces"), || TriangleBvh::new(b).expect("faces"));
     let never = || false;
