@@ -58,11 +58,12 @@ fn generate_info_convert_hausdorff_chain() {
     assert!(meshlod(&["convert", s(&obj), s(&ply), "--clean"]).status.success());
     let same = ok_json(&["hausdorff", s(&obj), s(&ply), "--json"]);
     for key in [
-        "hausdorff",
-        "hausdorff_lower",
+        "hausdorff_paper",
+        "hausdorff_lower_paper",
+        "hausdorff_absolute",
         "tolerance",
-        "mean",
-        "rms",
+        "mean_paper",
+        "rms_paper",
         "hausdorff_diag_pct",
         "samples",
         "a_to_b",
@@ -70,26 +71,26 @@ fn generate_info_convert_hausdorff_chain() {
     ] {
         assert!(same.get(key).is_some(), "hausdorff lacks {key}");
     }
-    assert_eq!(same["hausdorff"], 0.0);
-    assert_eq!(same["mean"], 0.0);
+    assert_eq!(same["hausdorff_paper"], 0.0);
+    assert_eq!(same["mean_paper"], 0.0);
 
     let coarse = dir.join("coarse.obj");
     assert!(meshlod(&["generate", "torus", "-o", s(&coarse), "--resolution", "6"]).status.success());
     let d = ok_json(&["hausdorff", s(&obj), s(&coarse), "--json", "--samples", "2000"]);
-    assert!(d["hausdorff"].as_f64().unwrap() > 0.01);
-    assert!(d["mean"].as_f64().unwrap() < d["hausdorff"].as_f64().unwrap());
+    assert!(d["hausdorff_paper"].as_f64().unwrap() > 0.01);
+    assert!(d["mean_paper"].as_f64().unwrap() < d["hausdorff_paper"].as_f64().unwrap());
     // Certified: the lower bound is a distance reached, the upper bound within the tolerance of it.
-    let (upper, lower) = (d["hausdorff"].as_f64().unwrap(), d["hausdorff_lower"].as_f64().unwrap());
+    let (upper, lower) = (d["hausdorff_paper"].as_f64().unwrap(), d["hausdorff_lower_paper"].as_f64().unwrap());
     assert!(lower <= upper && upper - lower <= 1e-3 * lower, "[{lower}, {upper}]");
     assert_eq!(d["converged"], true);
     // One direction on its own: its bounds meet too, and the symmetric figure is the larger one.
     let one = ok_json(&["hausdorff", s(&obj), s(&coarse), "--json", "--directed"]);
-    let (one_upper, one_lower) = (one["max_upper"].as_f64().unwrap(), one["max_lower"].as_f64().unwrap());
+    let (one_upper, one_lower) = (one["max_upper_paper"].as_f64().unwrap(), one["max_lower_paper"].as_f64().unwrap());
     assert!(one_lower <= one_upper && one_upper - one_lower <= 1e-3 * one_lower, "[{one_lower}, {one_upper}]");
     assert!(one_upper <= upper * (1.0 + 1e-3) && one["direction"] == "a_to_b");
     let loose = ok_json(&["hausdorff", s(&obj), s(&coarse), "--json", "--tolerance", "0.1"]);
-    let loose_upper = loose["hausdorff"].as_f64().unwrap();
-    assert!(loose_upper >= lower && loose_upper <= 1.1 * loose["hausdorff_lower"].as_f64().unwrap());
+    let loose_upper = loose["hausdorff_paper"].as_f64().unwrap();
+    assert!(loose_upper >= lower && loose_upper <= 1.1 * loose["hausdorff_lower_paper"].as_f64().unwrap());
 }
 
 #[test]
@@ -105,7 +106,7 @@ fn errors_are_clear_and_nonzero() {
     let empty = dir.join("empty.obj");
     std::fs::write(&empty, "v 0 0 0\n").unwrap();
     fails_with(&["hausdorff", s(&empty), s(&empty)], "no faces");
-    fails_with(&["convert", s(&nan), s(&dir.join("out.stl"))], "line 2");
+    fails_with(&["convert", s(&nan), s(&dir.join("out.ply"))], "line 2");
     let good = dir.join("good.obj");
     std::fs::write(&good, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
     fails_with(&["convert", s(&good), s(&dir.join("out.stl"))], "unsupported format");
@@ -126,7 +127,7 @@ fn info_matches_known_counts_of_shared_meshes() {
     }
     let cow = dir.join("cow.obj");
     let zero = ok_json(&["hausdorff", s(&cow), s(&cow), "--json"]);
-    assert_eq!(zero["hausdorff"], 0.0);
+    assert_eq!(zero["hausdorff_paper"], 0.0);
 }
 
 #[test]
@@ -146,9 +147,17 @@ fn simplify_pm_lod_chain() {
     let pm = dir.join("blob.pm");
     let report =
         ok_json(&["simplify", s(&input), "-o", s(&out), "--ratio", "0.9", "--pm", s(&pm), "--hausdorff", "--json"]);
-    for key in
-        ["faces_in", "faces_out", "metric", "w", "seconds", "stop_reason", "hausdorff", "mean", "bytes_per_split"]
-    {
+    for key in [
+        "faces_in",
+        "faces_out",
+        "metric",
+        "w",
+        "seconds",
+        "stop_reason",
+        "hausdorff_paper",
+        "mean_paper",
+        "bytes_per_split",
+    ] {
         assert!(report.get(key).is_some(), "simplify lacks {key}");
     }
     assert_eq!(report["stop_reason"], "target_reached");
@@ -159,7 +168,7 @@ fn simplify_pm_lod_chain() {
     let lod = ok_json(&["lod", s(&pm), "--faces", &faces_in.to_string(), "-o", s(&full), "--json"]);
     assert_eq!(lod["faces"], faces_in);
     let d = ok_json(&["hausdorff", s(&input), s(&full), "--json"]);
-    assert_eq!(d["hausdorff"], 0.0);
+    assert_eq!(d["hausdorff_paper"], 0.0);
     let mid = dir.join("mid.obj");
     let lod = ok_json(&["lod", s(&pm), "--faces", "1000", "-o", s(&mid), "--json"]);
     assert!(lod["faces"].as_u64().unwrap() <= 1000 && lod["faces"].as_u64().unwrap() >= 998);
@@ -189,7 +198,8 @@ fn refine_both_directions() {
     assert!(meshlod(&["generate", "blob", "-o", s(&input), "--resolution", "20"]).status.success());
     let out = dir.join("out.obj");
     let up = ok_json(&["refine", s(&input), "-o", s(&out), "--etc", "1.0", "--json", "--reference", s(&input)]);
-    for key in ["faces_in", "faces_out", "etc", "mode", "seconds", "reference_mean", "reference_max"] {
+    for key in ["faces_in", "faces_out", "etc", "mode", "seconds", "reference_mean_paper", "reference_hausdorff_paper"]
+    {
         assert!(up.get(key).is_some(), "refine lacks {key}");
     }
     assert_eq!(up["mode"], "subdivide");
@@ -227,10 +237,10 @@ fn predictor_drives_w_and_etc() {
     let candidates = searched["w_candidates"].as_array().expect("candidates listed");
     let ws: Vec<f64> = candidates.iter().map(|c| c["w"].as_f64().unwrap()).collect();
     assert_eq!(ws, [0.0, 0.5, 1.0, 1.5, 2.0]);
-    let lowest = candidates.iter().map(|c| c["hausdorff"].as_f64().unwrap()).fold(f64::INFINITY, f64::min);
+    let lowest = candidates.iter().map(|c| c["hausdorff_paper"].as_f64().unwrap()).fold(f64::INFINITY, f64::min);
     let chosen = candidates.iter().find(|c| c["w"] == searched["w"]).expect("the chosen w is a candidate");
-    assert_eq!(chosen["hausdorff"].as_f64().unwrap(), lowest);
-    assert_eq!(searched["hausdorff"].as_f64().unwrap(), lowest, "the output is the chosen run");
+    assert_eq!(chosen["hausdorff_paper"].as_f64().unwrap(), lowest);
+    assert_eq!(searched["hausdorff_paper"].as_f64().unwrap(), lowest, "the output is the chosen run");
     fails_with(&["simplify", s(&input), "-o", s(&out), "--w", "search", "--metric", "melax"], "Melax has no w");
     fails_with(&["predict", s(&input), "--ratio", "3"], "ratio");
 }

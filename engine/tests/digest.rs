@@ -65,7 +65,10 @@ fn cases() -> BTreeMap<String, String> {
     let variants: Vec<(&str, SimplifyOptions)> = vec![
         ("qem", ratio(0.9)),
         ("w1", SimplifyOptions { metric: Metric::Qfvp { w: 1.0 }, ..ratio(0.9) }),
-        ("w1.5-recompute", SimplifyOptions { metric: Metric::Qfvp { w: 1.5 }, normals: NormalUpdate::Recompute, ..ratio(0.95) }),
+        (
+            "w1.5-recompute",
+            SimplifyOptions { metric: Metric::Qfvp { w: 1.5 }, normals: NormalUpdate::Recompute, ..ratio(0.95) },
+        ),
         ("melax", SimplifyOptions { metric: Metric::Melax, ..ratio(0.9) }),
         ("paper-lock", SimplifyOptions { placement: Placement::Paper, boundary: BoundaryMode::Lock, ..ratio(0.9) }),
         ("endpoint", SimplifyOptions { placement: Placement::Endpoint, ..ratio(0.99) }),

@@ -128,7 +128,7 @@ fn bad_input_is_refused_clearly() {
     ));
     assert!(matches!(
         err(RefineOptions { etc: None, target_faces: Some(10_000_000), ..Default::default() }),
-        MeshError::InvalidParameter { name: "faces", .. }
+        MeshError::InvalidParameter { name: "target_faces", .. }
     ));
     assert!(matches!(refine(&Mesh::default(), &RefineOptions::default()), Err(MeshError::Empty { .. })));
     let cancelled = RefineOptions {

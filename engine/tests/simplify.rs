@@ -297,7 +297,7 @@ fn bad_options_and_inputs_are_refused() {
     let err = |o: SimplifyOptions| simplify(&mesh, &o).unwrap_err();
     assert!(matches!(
         err(SimplifyOptions { target_ratio: Some(1.5), ..Default::default() }),
-        MeshError::InvalidParameter { name: "ratio", .. }
+        MeshError::InvalidParameter { name: "target_ratio", .. }
     ));
     assert!(matches!(
         err(SimplifyOptions { metric: Metric::Qfvp { w: 3.0 }, ..Default::default() }),

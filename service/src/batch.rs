@@ -1,56 +1,24 @@
-//! `meshlod batch MANIFEST`: many jobs, locally or against a server, with bounded parallelism, a
-//! progress bar, one JSON result line per job, and resumability.
-//!
-//! The manifest is JSON lines; each line is one job with the same flags as the command line:
-//!
-//! ```text
-//! {"op": "simplify", "input": "in/bunny.obj", "output": "out/bunny-10.ply", "args": ["--ratio", "0.9"]}
-//! {"op": "refine",   "input": "in/cow.obj",   "output": "out/cow-fine.obj", "args": ["--etc", "1.0"]}
-//! ```
-//!
-//! A job whose output exists and is newer than its input and than the manifest is skipped
-//! (`--force` redoes it), so an interrupted batch resumes where it stopped. Relative paths are
-//! relative to the manifest's folder.
+//! `meshlod batch MANIFEST`: many jobs, here or on one server over one connection, with bounded
+//! parallelism, a progress bar, one JSON result line per job, resumability, and sharding across
+//! the pods of a Kubernetes Indexed Job. The manifest format is [`crate::cli::MANIFEST_HELP`].
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
-use clap::Args;
+use meshlod_service::client::Remote;
+use meshlod_service::executor::{Executor, Local};
 use serde::Deserialize;
 use serde_json::json;
 
-use crate::commands::{Job, parse_job, refine_report, simplify_report};
+use crate::cli::{BatchArgs, Job, parse_job};
 
-/// `meshlod batch` flags.
-#[derive(Debug, Args)]
-pub(crate) struct BatchArgs {
-    /// Manifest: one JSON job per line.
-    manifest: PathBuf,
-    /// Run against this server instead of locally.
-    #[arg(long, env = "MESHLOD_SERVER")]
-    server: Option<String>,
-    /// Bearer token for the server.
-    #[arg(long, env = "MESHLOD_TOKEN", hide_env_values = true)]
-    token: Option<String>,
-    /// Jobs at once (default: the number of cores).
-    #[arg(long)]
-    jobs: Option<usize>,
-    /// Write the per-job results (JSON lines) here instead of stdout.
-    #[arg(long)]
-    results: Option<PathBuf>,
-    /// Redo jobs whose output is already up to date.
-    #[arg(long)]
-    force: bool,
-    /// No progress bar.
-    #[arg(long)]
-    quiet: bool,
-}
-
+/// One line of the manifest; any other key is refused.
 #[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct ManifestLine {
     op: String,
     input: PathBuf,
@@ -59,37 +27,112 @@ struct ManifestLine {
     args: Vec<String>,
 }
 
-fn up_to_date(input: &Path, output: &Path, manifest: &Path) -> bool {
-    let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
-    match (modified(input), modified(output), modified(manifest)) {
-        (Some(i), Some(o), Some(m)) => o >= i && o >= m,
-        _ => false,
+/// A job of the manifest with its line number.
+#[derive(Debug)]
+struct Entry {
+    line: usize,
+    job: Job,
+}
+
+impl Entry {
+    fn input(&self) -> &Path {
+        match &self.job {
+            Job::Simplify(a) => &a.input,
+            Job::Refine(a) => &a.input,
+        }
+    }
+
+    /// Every file the job writes.
+    fn outputs(&self) -> Vec<&Path> {
+        match &self.job {
+            Job::Simplify(a) => std::iter::once(a.output.as_path()).chain(a.pm.as_deref()).collect(),
+            Job::Refine(a) => vec![a.output.as_path()],
+        }
     }
 }
 
-/// Runs a batch.
-pub(crate) fn run(args: BatchArgs) -> Result<()> {
-    let text =
-        std::fs::read_to_string(&args.manifest).with_context(|| format!("reading {}", args.manifest.display()))?;
-    let base = args.manifest.parent().unwrap_or(Path::new(".")).to_path_buf();
+/// Reads and checks every line of the manifest: all jobs parse, or the batch does not start.
+fn read_manifest(manifest: &Path) -> Result<Vec<Entry>> {
+    let text = std::fs::read_to_string(manifest).with_context(|| format!("reading {}", manifest.display()))?;
+    let base = manifest.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let resolve = |p: &Path| if p.is_absolute() { p.to_path_buf() } else { base.join(p) };
     let mut jobs = Vec::new();
-    for (i, line) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
-    {
-        let entry: ManifestLine = serde_json::from_str(line)
-            .with_context(|| format!("{} line {}: not a job object", args.manifest.display(), i + 1))?;
-        let input = base.join(&entry.input);
-        let output = base.join(&entry.output);
-        let job = parse_job(&entry.op, &input.to_string_lossy(), &output.to_string_lossy(), &entry.args)
-            .with_context(|| format!("{} line {}", args.manifest.display(), i + 1))?;
-        jobs.push((i + 1, input, output, job));
+    for (i, line) in text.lines().enumerate() {
+        if line.trim().is_empty() || line.trim_start().starts_with('#') {
+            continue;
+        }
+        let at = || format!("{} line {}", manifest.display(), i + 1);
+        let entry: ManifestLine = serde_json::from_str(line).with_context(at)?;
+        let (input, output) = (resolve(&entry.input), resolve(&entry.output));
+        let mut job =
+            parse_job(&entry.op, &input.to_string_lossy(), &output.to_string_lossy(), &entry.args).with_context(at)?;
+        // Path flags are relative to the manifest too, like input and output.
+        match &mut job {
+            Job::Simplify(a) => {
+                a.json = true;
+                a.pm = a.pm.as_deref().map(resolve);
+            }
+            Job::Refine(a) => {
+                a.json = true;
+                a.reference = a.reference.as_deref().map(resolve);
+            }
+        }
+        jobs.push(Entry { line: i + 1, job });
     }
     if jobs.is_empty() {
-        bail!("{}: no jobs", args.manifest.display());
+        bail!("{}: no jobs", manifest.display());
+    }
+    Ok(jobs)
+}
+
+/// Whether every output of a job exists and is newer than its input and the manifest.
+fn up_to_date(entry: &Entry, manifest: &Path) -> bool {
+    let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+    let (Some(input), Some(manifest)) = (modified(entry.input()), modified(manifest)) else { return false };
+    entry.outputs().into_iter().all(|o| modified(o).is_some_and(|o| o >= input && o >= manifest))
+}
+
+fn run_job(entry: &Entry, executor: &dyn Executor) -> Result<serde_json::Value> {
+    for output in entry.outputs() {
+        if let Some(parent) = output.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(parent).with_context(|| format!("creating {}", parent.display()))?;
+        }
+    }
+    let report = match &entry.job {
+        Job::Simplify(a) => executor.simplify(&a.job()),
+        Job::Refine(a) => executor.refine(&a.job()),
+    };
+    if report.is_err() {
+        // Whatever the job wrote before it failed would make a rerun skip it.
+        for output in entry.outputs() {
+            let _ = std::fs::remove_file(output);
+        }
+    }
+    Ok(serde_json::Value::Object(report?))
+}
+
+/// Runs a batch.
+pub fn run(args: BatchArgs) -> Result<()> {
+    let mut jobs = read_manifest(&args.manifest)?;
+    if let (Some(index), Some(count)) = (args.shard_index, args.shard_count) {
+        if count == 0 || index >= count {
+            bail!("shard {index} of {count}: the index must be below the count");
+        }
+        let mut k = 0;
+        jobs.retain(|_| {
+            k += 1;
+            (k - 1) % count == index
+        });
+    } else if args.shard_count.is_some_and(|c| c > 1) {
+        bail!("--shard-count needs --shard-index (or $JOB_COMPLETION_INDEX)");
     }
     let workers = args.jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(2, |n| n.get())).max(1);
-    let runtime = match &args.server {
-        Some(_) => Some(tokio::runtime::Runtime::new().context("starting the async runtime")?),
-        None => None,
+    let executor: Box<dyn Executor> = match &args.server {
+        Some(server) => {
+            let timeout = Duration::try_from_secs_f64(args.timeout).context("--timeout")?;
+            Box::new(Remote::connect(server, args.token.clone(), timeout)?)
+        }
+        None => Box::new(Local::new(std::env::var_os("MESHLOD_MODEL_DIR").map(PathBuf::from))),
     };
     let progress = if args.quiet {
         indicatif::ProgressBar::hidden()
@@ -108,20 +151,21 @@ pub(crate) fn run(args: BatchArgs) -> Result<()> {
     std::thread::scope(|scope| {
         for _ in 0..workers.min(jobs.len()) {
             scope.spawn(|| {
-                while let Some((line, input, output, job)) = jobs.get(next.fetch_add(1, Ordering::SeqCst)) {
+                while let Some(entry) = jobs.get(next.fetch_add(1, Ordering::SeqCst)) {
                     let started = Instant::now();
-                    let result = if !args.force && up_to_date(input, output, &args.manifest) {
-                        Ok(None)
+                    let (line, input, outputs) = (entry.line, entry.input(), entry.outputs());
+                    let output = outputs[0];
+                    let record = if !args.force && up_to_date(entry, &args.manifest) {
+                        json!({"line": line, "input": input, "output": output, "status": "skipped"})
                     } else {
-                        run_job(job, runtime.as_ref(), &args).map(Some)
-                    };
-                    let record = match result {
-                        Ok(None) => json!({"line": line, "input": input, "output": output, "status": "skipped"}),
-                        Ok(Some(report)) => json!({"line": line, "input": input, "output": output, "status": "ok",
-                            "seconds": started.elapsed().as_secs_f64(), "report": report}),
-                        Err(e) => {
-                            failed.fetch_add(1, Ordering::SeqCst);
-                            json!({"line": line, "input": input, "output": output, "status": "error", "message": format!("{e:#}")})
+                        match run_job(entry, executor.as_ref()) {
+                            Ok(report) => json!({"line": line, "input": input, "output": output, "status": "ok",
+                                "seconds": started.elapsed().as_secs_f64(), "report": report}),
+                            Err(e) => {
+                                failed.fetch_add(1, Ordering::SeqCst);
+                                json!({"line": line, "input": input, "output": output, "status": "error",
+                                    "message": format!("{e:#}")})
+                            }
                         }
                     };
                     if let Ok(mut out) = sink.lock() {
@@ -138,26 +182,4 @@ pub(crate) fn run(args: BatchArgs) -> Result<()> {
         bail!("{failed} of {} jobs failed (see the results)", jobs.len());
     }
     Ok(())
-}
-
-fn run_job(job: &Job, runtime: Option<&tokio::runtime::Runtime>, args: &BatchArgs) -> Result<serde_json::Value> {
-    if let Some(parent) = match job {
-        Job::Simplify(a) => a.output.parent(),
-        Job::Refine(a) => a.output.parent(),
-    } {
-        std::fs::create_dir_all(parent).ok();
-    }
-    match (runtime, &args.server) {
-        (Some(runtime), Some(server)) => runtime.block_on(async {
-            let mut client = crate::remote::connect(server, 600.0).await?;
-            match job {
-                Job::Simplify(a) => crate::remote::remote_simplify(&mut client, a, &args.token).await,
-                Job::Refine(a) => crate::remote::remote_refine(&mut client, a, &args.token).await,
-            }
-        }),
-        _ => match job {
-            Job::Simplify(a) => simplify_report(a),
-            Job::Refine(a) => refine_report(a),
-        },
-    }
 }

@@ -1,564 +1,298 @@
-//! Subcommands of the `meshlod` binary.
+//! What each subcommand does: the simplify, refine and predict commands hand their job to an
+//! executor (here, or a server for `meshlod client`) and print its report; the others are small
+//! local tools. Text output is for people (counts first, 6 significant digits); `--json` prints
+//! the report as it is.
 
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
-use clap::{Parser, Subcommand, ValueEnum};
-use meshlod_engine::features::W_CLASSES;
 use meshlod_engine::hausdorff::{HausdorffOptions, HausdorffReport, directed_hausdorff, hausdorff};
-use meshlod_engine::io::{read_mesh, write_mesh};
+use meshlod_engine::io::{output_format, write_mesh};
 use meshlod_engine::pm_format::{encode, read_pm};
-use meshlod_engine::refine::{RefineMode, RefineOptions, refine};
-use meshlod_engine::simplify::{
-    BoundaryMode, Metric, NormalUpdate, Placement, SimplifyOptions, simplify, simplify_search_w,
-};
+use meshlod_engine::procedural;
+use meshlod_engine::simplify::{SimplifyOptions, simplify};
 use meshlod_engine::validate::{clean, validate};
-use meshlod_engine::{Mesh, procedural};
-use serde_json::json;
+use meshlod_service::client::Remote;
+use meshlod_service::convert::MeshLimits;
+use meshlod_service::executor::{Executor, Local, load};
+use meshlod_service::report::{self, Report};
+use meshlod_service::server::{ServerConfig, serve_with_listener, shutdown_signal};
+use serde_json::Value;
 
-/// meshlod: progressive meshes and levels of detail for heavy triangle meshes.
-#[derive(Debug, Parser)]
-#[command(name = "meshlod", version, about, long_about = None)]
-pub struct Cli {
-    #[command(subcommand)]
-    command: Command,
-}
+use crate::cli::{
+    Cli, ClientOperation, Command, HealthArgs, LogFormat, PredictArgs, RefineArgs, ServeArgs, Shape, SimplifyArgs,
+};
 
-#[derive(Debug, Subcommand)]
-enum Command {
-    /// Print a validation report: counts, bounding box, degenerate/duplicate faces, manifoldness.
-    Info {
-        /// Mesh file (.obj or .ply).
-        file: PathBuf,
-        /// Print one JSON object instead of text.
-        #[arg(long)]
-        json: bool,
-    },
-    /// Convert between OBJ and PLY (format from the output extension).
-    Convert {
-        /// Input mesh.
-        input: PathBuf,
-        /// Output mesh (.obj or binary .ply).
-        output: PathBuf,
-        /// Weld coincident vertices, drop degenerate/duplicate faces and unreferenced vertices.
-        #[arg(long)]
-        clean: bool,
-    },
-    /// Symmetric Hausdorff distance between two meshes, with certified lower and upper bounds
-    /// (units relative to A).
-    Hausdorff {
-        /// Reference mesh A (its bounding box defines the units).
-        a: PathBuf,
-        /// Mesh B.
-        b: PathBuf,
-        /// Relative gap allowed between the bounds: stop when upper ≤ lower · (1 + tolerance).
-        #[arg(long, default_value_t = HausdorffOptions::DEFAULT_TOLERANCE)]
-        tolerance: f64,
-        /// Face samples per direction for the area-weighted mean and RMS (default: half the
-        /// larger vertex count, at least 10000).
-        #[arg(long)]
-        samples: Option<usize>,
-        /// Seed of the face sampler.
-        #[arg(long, default_value_t = HausdorffOptions::default().seed)]
-        seed: u64,
-        /// Only the one-sided distance from A's surface to B's, its bounds met within the tolerance
-        /// (the symmetric search proves the smaller direction only below the larger one).
-        #[arg(long)]
-        directed: bool,
-        /// Print one JSON object instead of text.
-        #[arg(long)]
-        json: bool,
-    },
-    /// Write a procedurally generated mesh (for trying meshlod without data).
-    Generate {
-        /// Which shape.
-        #[arg(value_enum)]
-        shape: Shape,
-        /// Output mesh (.obj or .ply).
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Resolution: subdivision level for the sphere, grid steps for the others.
-        #[arg(long, default_value_t = 64)]
-        resolution: u32,
-    },
-    /// Simplify by edge collapse (QFVP, QEM or Melax), optionally writing a progressive mesh.
-    Simplify(SimplifyArgs),
-    /// Energy-operator LOD: collapse low-energy faces and/or subdivide high-energy ones.
-    Refine(RefineArgs),
-    /// Extract one level of detail from a progressive mesh (.pm).
-    Lod {
-        /// Progressive mesh written by `meshlod simplify --pm`.
-        input: PathBuf,
-        /// Output mesh (.obj or .ply).
-        #[arg(short, long)]
-        output: PathBuf,
-        /// The finest level with at most this many faces.
-        #[arg(long, conflicts_with_all = ["vertices", "max_error"])]
-        faces: Option<usize>,
-        /// The level with this many vertices.
-        #[arg(long, conflicts_with = "max_error")]
-        vertices: Option<usize>,
-        /// The coarsest level whose recorded collapse error is at most this (paper units).
-        #[arg(long)]
-        max_error: Option<f32>,
-        /// Print one JSON object instead of text.
-        #[arg(long)]
-        json: bool,
-    },
-    /// Run the gRPC server (meshlod.v1.MeshLod, health, reflection, metrics).
-    Serve(crate::remote::ServeArgs),
-    /// Call a meshlod server: the same operations and flags as the local commands.
-    Client(crate::remote::ClientArgs),
-    /// Run many jobs from a manifest (JSON lines), locally or against a server.
-    Batch(crate::batch::BatchArgs),
-    /// Predict w and ETC for a mesh and a target with the shipped (or $MESHLOD_MODEL_DIR) model.
-    Predict {
-        /// Input mesh.
-        input: PathBuf,
-        /// Fraction of faces to remove.
-        #[arg(long, conflicts_with = "faces", required_unless_present = "faces")]
-        ratio: Option<f64>,
-        /// Target face count.
-        #[arg(long)]
-        faces: Option<usize>,
-        /// Print one JSON object instead of text.
-        #[arg(long)]
-        json: bool,
-    },
-    /// Generate training samples for the predictor (features, errors of every w, exact ETCs).
-    Samples(crate::samples::SamplesArgs),
-    /// Run the main job on a built-in mesh: generate, validate, measure. Needs no files.
-    Demo {
-        /// Directory to write the demo meshes into (default: a temporary directory).
-        #[arg(long)]
-        out_dir: Option<PathBuf>,
-    },
-}
-
-#[derive(Debug, Clone, clap::Args)]
-pub(crate) struct SimplifyArgs {
-    /// Input mesh (.obj or .ply).
-    pub(crate) input: PathBuf,
-    /// Output mesh (.obj or .ply).
-    #[arg(short, long)]
-    pub(crate) output: PathBuf,
-    /// Keep at most this many faces.
-    #[arg(long, conflicts_with = "ratio")]
-    pub(crate) faces: Option<usize>,
-    /// Fraction of the faces to remove, as in the paper: 0.9 keeps 10% (default 0.5).
-    #[arg(long)]
-    pub(crate) ratio: Option<f64>,
-    /// Stop before a collapse whose error estimate exceeds this (paper units).
-    #[arg(long)]
-    pub(crate) max_error: Option<f64>,
-    /// Collapse cost.
-    #[arg(long, value_enum, default_value_t = MetricArg::Qfvp)]
-    pub(crate) metric: MetricArg,
-    /// QFVP exponent w in [0, 2] (0 is plain QEM; the lowest error on most shared meshes, see
-    /// docs/simplify-report.md); `auto` for the predictor's choice; `search` to simplify with each
-    /// of 0, 0.5, 1, 1.5, 2 and keep the result with the lowest Hausdorff distance (five runs).
-    #[arg(long, default_value = "0")]
-    pub(crate) w: WArg,
-    /// Placement of the merged vertex.
-    #[arg(long, value_enum, default_value_t = PlacementArg::Optimal)]
-    pub(crate) placement: PlacementArg,
-    /// Normal of the merged vertex: the paper's linear estimate or a recompute over its fan.
-    #[arg(long, value_enum, default_value_t = NormalsArg::Linear)]
-    pub(crate) normals: NormalsArg,
-    /// Open boundaries: preserve (slide along the border) or lock (never move).
-    #[arg(long, value_enum, default_value_t = BoundaryArg::Preserve)]
-    pub(crate) boundary: BoundaryArg,
-    /// Largest change of a face normal one collapse may cause, in degrees.
-    #[arg(long, default_value_t = 90.0)]
-    pub(crate) max_normal_change: f64,
-    /// Distance guard: each collapse also pays for the distance it opens between the result and
-    /// the input, measured both ways. Lower Hausdorff distance on most meshes (a thin tip is no
-    /// longer shortened for free) at several times the cost (docs/simplify-report.md, Table 1b).
-    /// `--guard` alone is weight 1; 0 is off.
-    #[arg(long, value_name = "WEIGHT", num_args = 0..=1, default_missing_value = "1", default_value_t = 0.0)]
-    pub(crate) guard: f64,
-    /// Also write the progressive mesh (base + vertex splits) to this .pm file.
-    #[arg(long)]
-    pub(crate) pm: Option<PathBuf>,
-    /// Measure the Hausdorff distance between input and output.
-    #[arg(long)]
-    pub(crate) hausdorff: bool,
-    /// Print one JSON object instead of text.
-    #[arg(long)]
-    pub(crate) json: bool,
-}
-
-#[derive(Debug, Clone, clap::Args)]
-pub(crate) struct RefineArgs {
-    /// Input mesh (.obj or .ply).
-    pub(crate) input: PathBuf,
-    /// Output mesh (.obj or .ply).
-    #[arg(short, long)]
-    pub(crate) output: PathBuf,
-    /// Energy threshold coefficient: threshold = ETC × mean face energy; `auto` (with --faces) takes
-    /// the predictor's estimate instead of the exact search.
-    #[arg(long, required_unless_present = "faces")]
-    pub(crate) etc: Option<Auto>,
-    /// Target face count; the ETC reaching it is searched and reported.
-    #[arg(long)]
-    pub(crate) faces: Option<usize>,
-    /// What to do (default: subdivide, or with --faces whichever direction reaches the target).
-    #[arg(long, value_enum)]
-    pub(crate) mode: Option<ModeArg>,
-    /// Subdivision rounds.
-    #[arg(long, default_value_t = 1)]
-    pub(crate) rounds: u32,
-    /// Measure the Metro error of the output against this reference mesh.
-    #[arg(long)]
-    pub(crate) reference: Option<PathBuf>,
-    /// Print one JSON object instead of text.
-    #[arg(long)]
-    pub(crate) json: bool,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub(crate) enum ModeArg {
-    Simplify,
-    Subdivide,
-    Both,
-}
-
-pub(crate) fn run_refine(args: RefineArgs) -> Result<()> {
-    let report = refine_report(&args)?;
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        println!(
-            "{}: {} → {} faces with ETC {:.4} in {:.3} s",
-            report["mode"],
-            report["faces_in"],
-            report["faces_out"],
-            report["etc"].as_f64().unwrap_or(0.0),
-            report["seconds"].as_f64().unwrap_or(0.0)
-        );
-        if let Some(m) = report.get("reference_mean") {
-            println!("against the reference: mean {m}, max {} (paper units)", report["reference_max"]);
+/// Runs one parsed command line.
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Info { file, json } => info(&file, json),
+        Command::Convert { input, output, clean } => convert(&input, &output, clean),
+        Command::Hausdorff { a, b, tolerance, samples, seed, directed, json } => {
+            let options = HausdorffOptions { samples, seed, tolerance, cancel: None };
+            measure(&a, &b, &options, directed, json)
         }
+        Command::Generate { shape, output, resolution } => generate(shape, &output, resolution),
+        Command::Simplify(args) => run_simplify(&local(), &args),
+        Command::Refine(args) => run_refine(&local(), &args),
+        Command::Predict(args) => run_predict(&local(), &args),
+        Command::Lod { input, output, faces, vertices, max_error, json } => {
+            lod(&input, &output, faces, vertices, max_error, json)
+        }
+        Command::Serve(args) => serve(args),
+        Command::Client(args) => {
+            let remote = Remote::connect(&args.server.server, args.server.token.clone(), args.server.deadline()?)?;
+            match &args.operation {
+                ClientOperation::Simplify(a) => run_simplify(&remote, a),
+                ClientOperation::Refine(a) => run_refine(&remote, a),
+                ClientOperation::Predict(a) => run_predict(&remote, a),
+            }
+        }
+        Command::Health(args) => health(&args),
+        Command::Batch(args) => crate::batch::run(args),
+        Command::Samples(args) => crate::samples::run(args),
+        Command::Demo { out_dir } => demo(out_dir),
+    }
+}
+
+/// The local executor, its predictor from `$MESHLOD_MODEL_DIR` or built in.
+fn local() -> Local {
+    Local::new(std::env::var_os("MESHLOD_MODEL_DIR").map(PathBuf::from))
+}
+
+/// A spinner on the terminal while `work` runs (nothing when stderr is not a terminal).
+fn with_progress<T>(what: String, work: impl FnOnce() -> T) -> T {
+    if !std::io::stderr().is_terminal() {
+        return work();
+    }
+    let spinner = indicatif::ProgressBar::new_spinner().with_message(what);
+    spinner.enable_steady_tick(Duration::from_millis(120));
+    let out = work();
+    spinner.finish_and_clear();
+    out
+}
+
+/// `x` with 6 significant digits, without trailing zeros.
+pub(crate) fn sig(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let decimals = 5 - x.abs().log10().floor() as i32;
+    if !(0..=15).contains(&decimals) {
+        return format!("{x:.5e}");
+    }
+    let text = format!("{x:.*}", decimals as usize);
+    if text.contains('.') { text.trim_end_matches('0').trim_end_matches('.').to_string() } else { text }
+}
+
+fn num(report: &Report, key: &str) -> f64 {
+    report.get(key).and_then(Value::as_f64).unwrap_or(f64::NAN)
+}
+
+fn text(report: &Report, key: &str) -> String {
+    match report.get(key) {
+        Some(Value::String(s)) => s.clone(),
+        Some(Value::Null) | None => "-".into(),
+        Some(v) => v.to_string(),
+    }
+}
+
+fn print_json(report: &Report) -> Result<()> {
+    println!("{}", serde_json::to_string_pretty(report)?);
+    Ok(())
+}
+
+fn warn_all(report: &Report) {
+    for w in report.get("warnings").and_then(Value::as_array).into_iter().flatten() {
+        eprintln!("meshlod: warning: {}", w.as_str().unwrap_or_default());
+    }
+}
+
+fn print_hausdorff_line(report: &Report) {
+    if report.contains_key("hausdorff_paper") {
+        println!(
+            "  Hausdorff ≤ {} paper units (≥ {}, certified; {} % of the diagonal); mean {}, rms {}",
+            sig(num(report, "hausdorff_paper")),
+            sig(num(report, "hausdorff_lower_paper")),
+            sig(num(report, "hausdorff_diag_pct")),
+            sig(num(report, "mean_paper")),
+            sig(num(report, "rms_paper")),
+        );
+    }
+}
+
+/// `simplify` and `client simplify`.
+fn run_simplify(executor: &dyn Executor, args: &SimplifyArgs) -> Result<()> {
+    let job = args.job();
+    let report = with_progress(format!("simplifying {}", args.input.display()), || executor.simplify(&job))?;
+    warn_all(&report);
+    if args.json {
+        return print_json(&report);
+    }
+    println!(
+        "{} → {} faces, {} → {} vertices ({}): {} collapses, {} refused, {} frozen vertices",
+        text(&report, "faces_in"),
+        text(&report, "faces_out"),
+        text(&report, "vertices_in"),
+        text(&report, "vertices_out"),
+        text(&report, "stop_reason").replace('_', " "),
+        text(&report, "collapses"),
+        text(&report, "rejected"),
+        text(&report, "frozen_vertices"),
+    );
+    let w = if report.get("w").is_some_and(Value::is_null) {
+        String::new()
+    } else {
+        format!(" w = {}", text(&report, "w"))
+    };
+    println!(
+        "  {}{w} ({}), {} placement, guard {}; {} s → {}",
+        text(&report, "metric"),
+        text(&report, "w_source"),
+        text(&report, "placement"),
+        text(&report, "guard"),
+        sig(num(&report, "seconds")),
+        args.output.display()
+    );
+    print_hausdorff_line(&report);
+    if let (Some(pm), true) = (&args.pm, report.contains_key("pm_bytes")) {
+        println!(
+            "  progressive mesh: {} splits, {} bytes ({} bytes per split) → {}",
+            text(&report, "pm_splits"),
+            text(&report, "pm_bytes"),
+            sig(num(&report, "bytes_per_split")),
+            pm.display()
+        );
     }
     Ok(())
 }
 
-/// Runs a local refinement and returns its JSON report.
-pub(crate) fn refine_report(args: &RefineArgs) -> Result<serde_json::Value> {
-    let mesh = load(&args.input)?;
-    let mode = match (args.mode, args.faces) {
-        (Some(ModeArg::Simplify), _) => RefineMode::Simplify,
-        (Some(ModeArg::Subdivide), _) => RefineMode::Subdivide,
-        (Some(ModeArg::Both), _) => RefineMode::Both,
-        (None, Some(n)) if n < mesh.face_count() => RefineMode::Simplify,
-        (None, _) => RefineMode::Subdivide,
-    };
-    let (etc, target_faces, model_version) = match (args.etc, args.faces) {
-        (Some(Auto::Value(_)), Some(_)) => bail!("give --etc or --faces, not both (or --etc auto with --faces)"),
-        (Some(Auto::Value(e)), None) => (Some(e), None, None),
-        (Some(Auto::Auto), Some(n)) => {
-            let advice = meshlod_service::predict::advise(&predictor()?, &mesh, n)?;
-            (Some(advice.etc), None, Some(advice.model_version))
-        }
-        (Some(Auto::Auto), None) => bail!("--etc auto needs --faces (the target the ETC is predicted for)"),
-        (None, faces) => (None, faces, None),
-    };
-    let options = RefineOptions { etc, target_faces, mode, rounds: args.rounds, cancel: None };
-    let result = refine(&mesh, &options)?;
-    write_mesh(&args.output, &result.mesh)?;
-    let stats = &result.stats;
-    let mut report = json!({
-        "faces_in": stats.faces_in,
-        "faces_out": stats.faces_out,
-        "etc": stats.etc,
-        "threshold": stats.threshold,
-        "mode": stats.mode,
-        "rounds": stats.rounds,
-        "split_edges": stats.split_edges,
-        "etc_source": if model_version.is_some() { "predicted" } else if args.etc.is_some() { "given" } else { "searched" },
-        "model_version": model_version,
-        "collapses": stats.collapses,
-        "seconds": stats.seconds,
-    });
-    if let Some(reference) = &args.reference {
-        let reference_mesh = load(reference)?;
-        let d = hausdorff(&reference_mesh, &result.mesh, &HausdorffOptions::default())?;
-        report["reference_mean"] = json!(d.mean);
-        report["reference_max"] = json!(d.hausdorff);
-        report["reference_max_lower"] = json!(d.hausdorff_lower);
-        report["reference_mean_diag_pct"] = json!(d.mean_diag_pct);
-        report["reference_max_diag_pct"] = json!(d.hausdorff_diag_pct);
+/// `refine` and `client refine`.
+fn run_refine(executor: &dyn Executor, args: &RefineArgs) -> Result<()> {
+    let job = args.job();
+    let report = with_progress(format!("refining {}", args.input.display()), || executor.refine(&job))?;
+    if args.json {
+        return print_json(&report);
     }
-    Ok(report)
-}
-
-/// `--w`: a number, `auto` (the predictor's choice) or `search` (the best of every class, measured).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum WArg {
-    Value(f64),
-    Auto,
-    Search,
-}
-
-impl std::str::FromStr for WArg {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        if s.eq_ignore_ascii_case("search") {
-            return Ok(WArg::Search);
-        }
-        match s.parse::<Auto>() {
-            Ok(Auto::Auto) => Ok(WArg::Auto),
-            Ok(Auto::Value(w)) => Ok(WArg::Value(w)),
-            Err(_) => Err(format!("'{s}' is neither a number, 'auto' nor 'search'")),
-        }
+    println!(
+        "{} → {} faces ({}): ETC {} ({}), {} edges split, {} collapses; {} s → {}",
+        text(&report, "faces_in"),
+        text(&report, "faces_out"),
+        text(&report, "mode"),
+        sig(num(&report, "etc")),
+        text(&report, "etc_source"),
+        text(&report, "split_edges"),
+        text(&report, "collapses"),
+        sig(num(&report, "seconds")),
+        args.output.display()
+    );
+    if report.contains_key("reference_hausdorff_paper") {
+        println!(
+            "  against {}: Hausdorff ≤ {} paper units (≥ {}, certified), mean {}",
+            args.reference.as_deref().unwrap_or(Path::new("the reference")).display(),
+            sig(num(&report, "reference_hausdorff_paper")),
+            sig(num(&report, "reference_hausdorff_lower_paper")),
+            sig(num(&report, "reference_mean_paper")),
+        );
     }
+    Ok(())
 }
 
-/// A number, or `auto` for the predictor's choice.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum Auto {
-    Auto,
-    Value(f64),
-}
-
-impl std::str::FromStr for Auto {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        if s.eq_ignore_ascii_case("auto") {
-            return Ok(Auto::Auto);
-        }
-        s.parse::<f64>().map(Auto::Value).map_err(|_| format!("'{s}' is neither a number nor 'auto'"))
+/// `predict` and `client predict`.
+fn run_predict(executor: &dyn Executor, args: &PredictArgs) -> Result<()> {
+    let report = executor.predict(&args.job())?;
+    if args.json {
+        return print_json(&report);
     }
+    let classes = report.get("classes").and_then(Value::as_array).cloned().unwrap_or_default();
+    let probabilities = report.get("probabilities").and_then(Value::as_array).cloned().unwrap_or_default();
+    let spread: Vec<String> = classes
+        .iter()
+        .zip(&probabilities)
+        .map(|(c, p)| format!("{}: {}", c, sig(p.as_f64().unwrap_or(f64::NAN))))
+        .collect();
+    println!(
+        "{} → {} faces: w = {} (probabilities {}), ETC ≈ {} to {}; model {}",
+        text(&report, "faces_in"),
+        text(&report, "target_faces"),
+        text(&report, "w"),
+        spread.join(", "),
+        sig(num(&report, "etc")),
+        text(&report, "etc_mode"),
+        text(&report, "model_version"),
+    );
+    Ok(())
 }
 
-/// The predictor: the model in `$MESHLOD_MODEL_DIR` if set, else the one built in.
-pub(crate) fn predictor() -> Result<meshlod_predictor::Predictor> {
-    let dir = std::env::var_os("MESHLOD_MODEL_DIR").map(PathBuf::from);
-    meshlod_service::predict::load(dir.as_deref()).context("loading the predictor model")
-}
-
-fn run_predict(input: &Path, ratio: Option<f64>, faces: Option<usize>, json: bool) -> Result<()> {
-    if let Some(r) = ratio
-        && !(0.0..1.0).contains(&r)
-    {
-        bail!("--ratio {r} is outside [0, 1): it is the fraction of faces removed");
-    }
-    let mesh = meshlod_engine::simplify::prepare(&load(input)?).0;
-    let target =
-        meshlod_service::predict::target_faces(mesh.face_count(), faces, ratio).context("give --ratio or --faces")?;
-    let started = Instant::now();
-    let advice = meshlod_service::predict::advise(&predictor()?, &mesh, target)?;
-    let report = json!({
-        "faces_in": mesh.face_count(),
-        "target_faces": target,
-        "w": advice.w.w,
-        "probabilities": advice.w.probabilities,
-        "classes": advice.w.classes,
-        "etc": advice.etc,
-        "etc_mode": if target > mesh.face_count() { "subdivide" } else { "simplify" },
-        "model_version": advice.model_version,
-        "seconds": started.elapsed().as_secs_f64(),
-    });
+fn info(file: &Path, json: bool) -> Result<()> {
+    let report = validate(&load(file)?);
+    let value = serde_json::to_value(&report)?;
     if json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        println!(
-            "w = {} (probabilities {:?} for {:?}), ETC ≈ {:.4} for {} faces ({}), model {}",
-            advice.w.w,
-            advice.w.probabilities,
-            advice.w.classes,
-            advice.etc,
-            target,
-            report["etc_mode"],
-            advice.model_version
-        );
+        println!("{}", serde_json::to_string_pretty(&value)?);
+        return Ok(());
     }
-    Ok(())
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub(crate) enum MetricArg {
-    Qfvp,
-    Qem,
-    Melax,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub(crate) enum PlacementArg {
-    Paper,
-    Optimal,
-    Endpoint,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub(crate) enum NormalsArg {
-    Linear,
-    Recompute,
-}
-
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub(crate) enum BoundaryArg {
-    Preserve,
-    Lock,
-}
-
-impl SimplifyArgs {
-    pub(crate) fn options(&self, w: f64) -> SimplifyOptions {
-        SimplifyOptions {
-            target_faces: self.faces,
-            target_ratio: if self.faces.is_some() { self.ratio } else { Some(self.ratio.unwrap_or(0.5)) },
-            max_error: self.max_error,
-            metric: match self.metric {
-                MetricArg::Qfvp => Metric::Qfvp { w },
-                MetricArg::Qem => Metric::Qem,
-                MetricArg::Melax => Metric::Melax,
-            },
-            placement: match self.placement {
-                PlacementArg::Paper => Placement::Paper,
-                PlacementArg::Optimal => Placement::Optimal,
-                PlacementArg::Endpoint => Placement::Endpoint,
-            },
-            normals: match self.normals {
-                NormalsArg::Linear => NormalUpdate::Linear,
-                NormalsArg::Recompute => NormalUpdate::Recompute,
-            },
-            boundary: match self.boundary {
-                BoundaryArg::Preserve => BoundaryMode::Preserve,
-                BoundaryArg::Lock => BoundaryMode::Lock,
-            },
-            max_normal_change_degrees: self.max_normal_change,
-            record_progressive: self.pm.is_some(),
-            guard: self.guard,
-            cancel: None,
-        }
-    }
-}
-
-pub(crate) fn run_simplify(args: SimplifyArgs) -> Result<()> {
-    let report = simplify_report(&args)?;
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        println!(
-            "{} → {} faces ({} collapses, {}) with {} in {:.3} s",
-            report["faces_in"],
-            report["faces_out"],
-            report["collapses"],
-            report["stop_reason"],
-            report["metric"],
-            report["seconds"].as_f64().unwrap_or(0.0)
-        );
-        if let Some(h) = report.get("hausdorff") {
-            println!(
-                "hausdorff ≤ {} paper units (≥ {}, certified), mean {}",
-                h, report["hausdorff_lower"], report["mean"]
-            );
-        }
-        if let Some(b) = report.get("pm_bytes") {
-            println!("progressive mesh: {b} bytes, {} bytes per split", report["bytes_per_split"]);
-        }
-    }
-    Ok(())
-}
-
-/// Runs a local simplification and returns its JSON report.
-pub(crate) fn simplify_report(args: &SimplifyArgs) -> Result<serde_json::Value> {
-    let mesh = load(&args.input)?;
-    let (w, model_version) = match args.w {
-        WArg::Value(w) => (w, None),
-        WArg::Search => (0.0, None), // replaced by each candidate in turn
-        WArg::Auto => {
-            let target = meshlod_service::predict::target_faces(mesh.face_count(), args.faces, args.ratio)
-                .unwrap_or(mesh.face_count() / 2);
-            let advice = meshlod_service::predict::advise(&predictor()?, &mesh, target)?;
-            (advice.w.w, Some(advice.model_version))
-        }
-    };
-    let mut options = args.options(w);
-    // A search has measured its result already; `measured` keeps that for --hausdorff.
-    let (result, candidates, measured) = if args.w == WArg::Search {
-        let search = simplify_search_w(&mesh, &options, &W_CLASSES)?;
-        options.metric = Metric::Qfvp { w: search.w };
-        let candidates: Vec<serde_json::Value> =
-            search.errors.iter().map(|&(w, hausdorff)| json!({ "w": w, "hausdorff": hausdorff })).collect();
-        (search.best, Some(candidates), Some(search.hausdorff))
-    } else {
-        (simplify(&mesh, &options)?, None, None)
-    };
-    write_mesh(&args.output, &result.mesh)?;
-    let stats = &result.stats;
-    let mut report = json!({
-        "faces_in": stats.faces_in,
-        "faces_out": stats.faces_out,
-        "vertices_in": stats.vertices_in,
-        "vertices_out": stats.vertices_out,
-        "metric": options.metric.name(),
-        "w": options.metric.w(),
-        "w_source": if model_version.is_some() {
-            "predicted"
-        } else if candidates.is_some() {
-            "searched"
-        } else {
-            "given"
-        },
-        "w_candidates": candidates,
-        "model_version": model_version,
-        "placement": options.placement,
-        "normals": options.normals,
-        "boundary": options.boundary,
-        "guard": options.guard,
-        "collapses": stats.collapses,
-        "stop_reason": stats.stop_reason,
-        "max_collapse_error": stats.max_collapse_error,
-        "frozen_vertices": stats.frozen_vertices,
-        "seconds": stats.seconds,
-    });
-    if let (Some(path), Some(pm)) = (&args.pm, &result.progressive) {
-        let bytes = encode(pm);
-        std::fs::write(path, &bytes).with_context(|| format!("writing {}", path.display()))?;
-        let base_bytes = 12 * (pm.base().vertex_count() + pm.base().face_count());
-        report["pm_bytes"] = json!(bytes.len());
-        report["pm_splits"] = json!(pm.levels());
-        report["bytes_per_split"] =
-            json!((bytes.len().saturating_sub(base_bytes + 32)) as f64 / pm.levels().max(1) as f64);
-    }
-    if args.hausdorff {
-        let d = match measured {
-            Some(d) => d,
-            None => hausdorff(&mesh, &result.mesh, &HausdorffOptions::default())?,
+    println!("{}", file.display());
+    // The report's own field order: counts first.
+    for (key, v) in value.as_object().expect("report is an object") {
+        let shown = match v {
+            Value::String(s) => s.clone(),
+            Value::Number(n) if n.is_f64() => sig(n.as_f64().unwrap_or(f64::NAN)),
+            Value::Array(items) => {
+                items.iter().map(|i| i.as_f64().map(sig).unwrap_or_else(|| i.to_string())).collect::<Vec<_>>().join(" ")
+            }
+            other => other.to_string(),
         };
-        for (key, value) in hausdorff_json(&meshlod_service::convert::hausdorff_to_proto(&d)) {
-            report[key] = value;
-        }
+        println!("  {:<30} {shown}", key.replace('_', " "));
     }
-    Ok(report)
+    Ok(())
 }
 
-/// The Hausdorff figures every JSON report carries, local or from the server, under the same keys
-/// (paper units unless named).
-pub(crate) fn hausdorff_json(d: &meshlod_service::proto::HausdorffReport) -> Vec<(&'static str, serde_json::Value)> {
-    vec![
-        ("hausdorff", json!(d.hausdorff)),
-        ("hausdorff_lower", json!(d.hausdorff_lower)),
-        ("hausdorff_tolerance", json!(d.tolerance)),
-        ("hausdorff_converged", json!(d.converged)),
-        ("hausdorff_diag_pct", json!(d.hausdorff_diag_pct)),
-        ("mean", json!(d.mean)),
-        ("rms", json!(d.rms)),
-        ("samples", json!(d.samples)),
-    ]
+fn convert(input: &Path, output: &Path, do_clean: bool) -> Result<()> {
+    output_format(output)?;
+    let mut mesh = load(input)?;
+    if do_clean {
+        let (cleaned, report) = clean(&mesh);
+        eprintln!("clean: {}", serde_json::to_string(&report)?);
+        mesh = cleaned;
+    }
+    write_mesh(output, &mesh)?;
+    Ok(())
+}
+
+fn measure(a: &Path, b: &Path, options: &HausdorffOptions, directed: bool, json: bool) -> Result<()> {
+    let (mesh_a, mesh_b) = (load(a)?, load(b)?);
+    if directed {
+        let d = with_progress("measuring".into(), || directed_hausdorff(&mesh_a, &mesh_b, options))?;
+        if json {
+            return print_json(&report::hausdorff_directed(&d, options.tolerance));
+        }
+        println!(
+            "a → b: at most {} paper units (certified), at least {}; mean {}, rms {}",
+            sig(d.max_upper),
+            sig(d.max_lower),
+            sig(d.mean),
+            sig(d.rms)
+        );
+        return Ok(());
+    }
+    let r = with_progress("measuring".into(), || hausdorff(&mesh_a, &mesh_b, options))?;
+    if json {
+        return print_json(&report::hausdorff_full(&r));
+    }
+    print_hausdorff(&r);
+    Ok(())
 }
 
 /// `meshlod hausdorff` in text: the certified figure first, then how it was obtained.
 fn print_hausdorff(r: &HausdorffReport) {
     println!(
-        "hausdorff {:.6} paper units ({:.4}% of the diagonal, {:.6e} absolute): certified upper bound; \
-         lower bound {:.6} ({})",
-        r.hausdorff,
-        r.hausdorff_diag_pct,
-        r.hausdorff_absolute,
-        r.hausdorff_lower,
+        "Hausdorff ≤ {} paper units ({} % of the diagonal, {} absolute): certified upper bound; lower bound {} ({})",
+        sig(r.hausdorff),
+        sig(r.hausdorff_diag_pct),
+        sig(r.hausdorff_absolute),
+        sig(r.hausdorff_lower),
         if r.converged {
             format!("within the tolerance {}", r.tolerance)
         } else {
@@ -566,13 +300,22 @@ fn print_hausdorff(r: &HausdorffReport) {
         }
     );
     println!(
-        "  a → b: [{:.6}, {:.6}]   b → a: [{:.6}, {:.6}]",
-        r.a_to_b.max_lower, r.a_to_b.max_upper, r.b_to_a.max_lower, r.b_to_a.max_upper
+        "  a → b: [{}, {}]   b → a: [{}, {}]",
+        sig(r.a_to_b.max_lower),
+        sig(r.a_to_b.max_upper),
+        sig(r.b_to_a.max_lower),
+        sig(r.b_to_a.max_upper)
     );
-    println!("  mean {:.6}, rms {:.6} (area-weighted, {} face samples); {:.3} s", r.mean, r.rms, r.samples, r.seconds);
+    println!(
+        "  mean {}, rms {} (area-weighted, {} face samples); {} s",
+        sig(r.mean),
+        sig(r.rms),
+        r.samples,
+        sig(r.seconds)
+    );
 }
 
-fn run_lod(
+fn lod(
     input: &Path,
     output: &Path,
     faces: Option<usize>,
@@ -580,7 +323,28 @@ fn run_lod(
     max_error: Option<f32>,
     json: bool,
 ) -> Result<()> {
+    output_format(output)?;
+    if max_error.is_some_and(|e| !(e.is_finite() && e >= 0.0)) {
+        bail!("--max-error {} must be a finite number ≥ 0", max_error.unwrap_or_default());
+    }
     let pm = read_pm(input)?;
+    let base = pm.base();
+    if let Some(n) = faces
+        && n < base.face_count()
+    {
+        eprintln!(
+            "meshlod: warning: --faces {n} is below the coarsest level (the base mesh, {} faces): writing the base",
+            base.face_count()
+        );
+    }
+    if let Some(n) = vertices
+        && n < base.vertex_count()
+    {
+        eprintln!(
+            "meshlod: warning: --vertices {n} is below the coarsest level (the base mesh, {} vertices): writing the base",
+            base.vertex_count()
+        );
+    }
     let level = match (faces, vertices, max_error) {
         (Some(n), _, _) => pm.level_for_faces(n),
         (_, Some(n), _) => n.saturating_sub(pm.base().vertex_count()).min(pm.levels()),
@@ -592,124 +356,91 @@ fn run_lod(
     let mesh = pm.at_level(level);
     write_mesh(output, &mesh)?;
     if json {
-        println!(
-            "{}",
-            json!({"level": level, "levels": pm.levels(), "faces": mesh.face_count(), "vertices": mesh.vertex_count()})
-        );
+        let report = serde_json::json!({
+            "level": level, "levels": pm.levels(), "faces": mesh.face_count(), "vertices": mesh.vertex_count()
+        });
+        println!("{report}");
     } else {
         println!("level {level} of {}: {} faces, {} vertices", pm.levels(), mesh.face_count(), mesh.vertex_count());
     }
     Ok(())
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
-enum Shape {
-    Sphere,
-    Torus,
-    Box,
-    Terrain,
-    Blob,
+/// Largest sphere level `generate` accepts (20 · 4⁹ = 5.2 M faces).
+const MAX_SPHERE_LEVEL: u32 = 9;
+
+fn generate(shape: Shape, output: &Path, resolution: Option<u32>) -> Result<()> {
+    output_format(output)?;
+    let mesh = match (shape, resolution) {
+        (_, Some(0)) => bail!("--resolution must be at least 1"),
+        (Shape::Sphere, Some(r)) if r > MAX_SPHERE_LEVEL => {
+            bail!("--resolution {r}: the sphere's subdivision level is at most {MAX_SPHERE_LEVEL}")
+        }
+        (Shape::Sphere, r) => procedural::icosphere(r.unwrap_or(6)),
+        (Shape::Torus, r) => procedural::torus(r.unwrap_or(64) * 2, r.unwrap_or(64), 0.35),
+        (Shape::Box, r) => procedural::sharp_box(r.unwrap_or(64)),
+        (Shape::Terrain, r) => procedural::terrain(r.unwrap_or(64), 1),
+        (Shape::Blob, r) => procedural::bumpy_blob(r.unwrap_or(64), r.unwrap_or(64) * 2, 1),
+    };
+    write_mesh(output, &mesh)?;
+    eprintln!("{} vertices, {} faces → {}", mesh.vertex_count(), mesh.face_count(), output.display());
+    Ok(())
 }
 
-fn generate(shape: Shape, resolution: u32) -> Mesh {
-    match shape {
-        Shape::Sphere => procedural::icosphere(resolution.min(9)),
-        Shape::Torus => procedural::torus(resolution * 2, resolution, 0.35),
-        Shape::Box => procedural::sharp_box(resolution),
-        Shape::Terrain => procedural::terrain(resolution, 1),
-        Shape::Blob => procedural::bumpy_blob(resolution, resolution * 2, 1),
-    }
+fn init_logging(format: LogFormat) {
+    let filter = tracing_subscriber::EnvFilter::try_from_env("MESHLOD_LOG")
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
+    let builder = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        // Colours only for a person watching: not in files, pipes or container logs.
+        .with_ansi(std::io::stderr().is_terminal());
+    let _ = match format {
+        LogFormat::Text => builder.try_init(),
+        LogFormat::Json => builder.json().try_init(),
+    };
 }
 
-fn load(path: &Path) -> Result<Mesh> {
-    Ok(read_mesh(path)?)
+/// Runs the server until SIGTERM or Ctrl-C.
+fn serve(args: ServeArgs) -> Result<()> {
+    init_logging(args.log_format);
+    let defaults = ServerConfig::default();
+    let metrics_listen = if args.metrics_listen.trim().is_empty() {
+        None
+    } else {
+        Some(args.metrics_listen.parse().with_context(|| format!("--metrics-listen {}", args.metrics_listen))?)
+    };
+    let predictor = meshlod_service::predict::load(args.model_dir.as_deref()).context("loading the predictor model")?;
+    tracing::info!(model = %predictor.metadata().model_version, "predictor loaded");
+    let config = ServerConfig {
+        predictor: Some(std::sync::Arc::new(predictor)),
+        listen: args.listen,
+        metrics_listen,
+        max_concurrent: args.max_concurrent.unwrap_or(defaults.max_concurrent),
+        max_queue: args.max_queue.unwrap_or(defaults.max_queue),
+        max_message_bytes: args.max_message_mib << 20,
+        limits: MeshLimits { max_faces: args.max_faces, max_vertices: args.max_faces },
+        tls: args.tls_cert.zip(args.tls_key),
+        token: args.token,
+        ..defaults
+    };
+    let runtime = tokio::runtime::Runtime::new().context("starting the async runtime")?;
+    runtime.block_on(async move {
+        let listener =
+            tokio::net::TcpListener::bind(config.listen).await.with_context(|| format!("binding {}", config.listen))?;
+        serve_with_listener(listener, config, shutdown_signal()).await.map_err(|e| anyhow::anyhow!(e))
+    })
 }
 
-/// One batch job, parsed with the same flags as the command line.
-#[derive(Debug, Clone)]
-pub(crate) enum Job {
-    Simplify(SimplifyArgs),
-    Refine(RefineArgs),
-}
-
-/// Parses `meshlod OP INPUT -o OUTPUT ARGS…` into a job.
-pub(crate) fn parse_job(op: &str, input: &str, output: &str, args: &[String]) -> Result<Job> {
-    let argv = ["meshlod", op, input, "-o", output].into_iter().map(String::from).chain(args.iter().cloned());
-    match Cli::try_parse_from(argv).map_err(|e| anyhow::anyhow!("{}", e.render().to_string().trim()))?.command {
-        Command::Simplify(a) => Ok(Job::Simplify(a)),
-        Command::Refine(a) => Ok(Job::Refine(a)),
-        _ => bail!("op must be simplify or refine, not {op}"),
-    }
-}
-
-/// Runs one parsed command line.
-pub fn run(cli: Cli) -> Result<()> {
-    match cli.command {
-        Command::Info { file, json } => {
-            let mesh = load(&file)?;
-            let report = validate(&mesh);
-            if json {
-                println!("{}", serde_json::to_string_pretty(&report)?);
-            } else {
-                println!("{}", file.display());
-                let value = serde_json::to_value(&report)?;
-                for (key, v) in value.as_object().expect("report is an object") {
-                    println!("  {key:<30} {v}");
-                }
-            }
-        }
-        Command::Convert { input, output, clean: do_clean } => {
-            let mut mesh = load(&input)?;
-            if do_clean {
-                let (cleaned, report) = clean(&mesh);
-                eprintln!("clean: {}", serde_json::to_string(&report)?);
-                mesh = cleaned;
-            }
-            write_mesh(&output, &mesh)?;
-        }
-        Command::Hausdorff { a, b, tolerance, samples, seed, directed, json } => {
-            let (mesh_a, mesh_b) = (load(&a)?, load(&b)?);
-            let options = HausdorffOptions { samples, seed, tolerance, cancel: None };
-            if directed {
-                let d = directed_hausdorff(&mesh_a, &mesh_b, &options)?;
-                if json {
-                    let mut value = serde_json::to_value(d)?;
-                    value["direction"] = json!("a_to_b");
-                    value["tolerance"] = json!(tolerance);
-                    println!("{}", serde_json::to_string_pretty(&value)?);
-                } else {
-                    println!(
-                        "a → b: at most {:.6} paper units (certified), at least {:.6}; mean {:.6}, rms {:.6}",
-                        d.max_upper, d.max_lower, d.mean, d.rms
-                    );
-                }
-                return Ok(());
-            }
-            let report = hausdorff(&mesh_a, &mesh_b, &options)?;
-            if json {
-                println!("{}", serde_json::to_string_pretty(&report)?);
-            } else {
-                print_hausdorff(&report);
-            }
-        }
-        Command::Generate { shape, output, resolution } => {
-            if resolution == 0 {
-                bail!("--resolution must be at least 1");
-            }
-            write_mesh(&output, &generate(shape, resolution))?;
-        }
-        Command::Simplify(args) => run_simplify(args)?,
-        Command::Refine(args) => run_refine(args)?,
-        Command::Lod { input, output, faces, vertices, max_error, json } => {
-            run_lod(&input, &output, faces, vertices, max_error, json)?
-        }
-        Command::Serve(args) => crate::remote::serve(args)?,
-        Command::Client(args) => crate::remote::client(args)?,
-        Command::Batch(args) => crate::batch::run(args)?,
-        Command::Samples(args) => crate::samples::run(args)?,
-        Command::Predict { input, ratio, faces, json } => run_predict(&input, ratio, faces, json)?,
-        Command::Demo { out_dir } => demo(out_dir)?,
-    }
+fn health(args: &HealthArgs) -> Result<()> {
+    let timeout = Duration::try_from_secs_f64(args.timeout).context("--timeout")?;
+    let runtime = tokio::runtime::Builder::new_current_thread().enable_all().build()?;
+    runtime.block_on(async {
+        tokio::time::timeout(timeout, meshlod_service::client::health(&args.server, &args.service, timeout))
+            .await
+            .map_err(|_| anyhow::anyhow!("{}: no answer within {} s", args.server, args.timeout))?
+    })?;
+    println!("serving");
     Ok(())
 }
 
@@ -739,12 +470,12 @@ fn demo(out_dir: Option<PathBuf>) -> Result<()> {
     let base_path = dir.join("blob-base.ply");
     write_mesh(&base_path, &result.mesh)?;
     println!(
-        "simplified 90% with {} (w = {}): {} → {} faces in {:.3} s; progressive mesh {} splits, {} bytes → {}",
+        "simplified 90% with {} (w = {}): {} → {} faces in {} s; progressive mesh {} splits, {} bytes → {}",
         options.metric.name(),
         options.metric.w().unwrap_or(0.0),
         result.stats.faces_in,
         result.stats.faces_out,
-        result.stats.seconds,
+        sig(result.stats.seconds),
         pm.levels(),
         bytes.len(),
         pm_path.display()
@@ -752,8 +483,13 @@ fn demo(out_dir: Option<PathBuf>) -> Result<()> {
     println!("level of detail    faces   Hausdorff (paper units)   % of diagonal");
     for faces in [result.stats.faces_out, 10_000, 25_000, original.face_count()] {
         let lod = pm.at_faces(faces);
-        let d = hausdorff(&original, &lod, &HausdorffOptions::default())?;
-        println!("  ≤ {faces:>7}    {:>7}   {:>20.6}    {:>10.4}", lod.face_count(), d.hausdorff, d.hausdorff_diag_pct);
+        let d: HausdorffReport = hausdorff(&original, &lod, &HausdorffOptions::default())?;
+        println!(
+            "  ≤ {faces:>7}    {:>7}   {:>20}    {:>10}",
+            lod.face_count(),
+            sig(d.hausdorff),
+            sig(d.hausdorff_diag_pct)
+        );
     }
     Ok(())
 }

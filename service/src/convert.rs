@@ -34,10 +34,12 @@ fn invalid(field: impl AsRef<str>, message: impl AsRef<str>) -> Status {
     Status::invalid_argument(format!("{}: {}", field.as_ref(), message.as_ref()))
 }
 
-/// Maps an engine error onto a gRPC status, naming the request field it concerns.
+/// Maps an engine error onto a gRPC status, naming the request field it concerns: a parameter
+/// error names `options_field.name`, or `name` alone when `options_field` is empty.
 pub fn engine_status(error: MeshError, options_field: &str) -> Status {
     match error {
         MeshError::Cancelled => Status::cancelled("request cancelled"),
+        MeshError::InvalidParameter { name, reason } if options_field.is_empty() => invalid(name, reason),
         MeshError::InvalidParameter { name, reason } => invalid(format!("{options_field}.{name}"), reason),
         MeshError::TooLarge { .. } => invalid("input", error.to_string()),
         MeshError::Empty { .. }
@@ -169,60 +171,57 @@ pub fn progressive_from_proto(base: &proto::Mesh, splits: &[proto::VertexSplit])
     ProgressiveMesh::from_stream(base, out).map_err(|e| invalid("splits", e.to_string()))
 }
 
-/// Engine options from the contract's; `w` is the exponent to use (given or predicted).
-pub fn simplify_options(o: &proto::SimplifyOptions, w: f64) -> Result<SimplifyOptions, Status> {
-    let metric = match proto::Metric::try_from(o.metric) {
-        Ok(proto::Metric::Unspecified | proto::Metric::Qfvp) => Metric::Qfvp { w },
-        Ok(proto::Metric::Qem) => Metric::Qem,
-        Ok(proto::Metric::Melax) => Metric::Melax,
-        Err(_) => return Err(invalid("options.metric", format!("unknown value {}", o.metric))),
-    };
-    let placement = match proto::Placement::try_from(o.placement) {
-        Ok(proto::Placement::Unspecified | proto::Placement::Optimal) => Placement::Optimal,
-        Ok(proto::Placement::Paper) => Placement::Paper,
-        Ok(proto::Placement::Endpoint) => Placement::Endpoint,
-        Err(_) => return Err(invalid("options.placement", format!("unknown value {}", o.placement))),
-    };
-    let normals = match proto::NormalUpdate::try_from(o.normals) {
-        Ok(proto::NormalUpdate::Unspecified | proto::NormalUpdate::Linear) => NormalUpdate::Linear,
-        Ok(proto::NormalUpdate::Recompute) => NormalUpdate::Recompute,
-        Err(_) => return Err(invalid("options.normals", format!("unknown value {}", o.normals))),
-    };
-    let boundary = match proto::BoundaryMode::try_from(o.boundary) {
-        Ok(proto::BoundaryMode::Unspecified | proto::BoundaryMode::Preserve) => BoundaryMode::Preserve,
-        Ok(proto::BoundaryMode::Lock) => BoundaryMode::Lock,
-        Err(_) => return Err(invalid("options.boundary", format!("unknown value {}", o.boundary))),
-    };
-    if let Some(r) = o.target_ratio
-        && !(0.0..1.0).contains(&r)
-    {
-        return Err(invalid("options.target_ratio", format!("{r} is outside [0, 1)")));
+/// Engine options from the contract's: enums mapped, unset fields given the engine's defaults.
+/// Nothing is range-checked here: [`SimplifyOptions::validate`] does that, once, for every front
+/// end, and its errors name the same fields. `w` is the request's (0 where unset, and where
+/// `w_auto` or `w_search` will replace it).
+impl TryFrom<&proto::SimplifyOptions> for SimplifyOptions {
+    type Error = Status;
+
+    fn try_from(o: &proto::SimplifyOptions) -> Result<SimplifyOptions, Status> {
+        let w = if o.w_auto || o.w_search { 0.0 } else { o.w.unwrap_or(0.0) };
+        let metric = match proto::Metric::try_from(o.metric) {
+            Ok(proto::Metric::Unspecified | proto::Metric::Qfvp) => Metric::Qfvp { w },
+            Ok(proto::Metric::Qem) => Metric::Qem,
+            Ok(proto::Metric::Melax) => Metric::Melax,
+            Err(_) => return Err(invalid("options.metric", format!("unknown value {}", o.metric))),
+        };
+        let placement = match proto::Placement::try_from(o.placement) {
+            Ok(proto::Placement::Unspecified | proto::Placement::Optimal) => Placement::Optimal,
+            Ok(proto::Placement::Paper) => Placement::Paper,
+            Ok(proto::Placement::Endpoint) => Placement::Endpoint,
+            Err(_) => return Err(invalid("options.placement", format!("unknown value {}", o.placement))),
+        };
+        let normals = match proto::NormalUpdate::try_from(o.normals) {
+            Ok(proto::NormalUpdate::Unspecified | proto::NormalUpdate::Linear) => NormalUpdate::Linear,
+            Ok(proto::NormalUpdate::Recompute) => NormalUpdate::Recompute,
+            Err(_) => return Err(invalid("options.normals", format!("unknown value {}", o.normals))),
+        };
+        let boundary = match proto::BoundaryMode::try_from(o.boundary) {
+            Ok(proto::BoundaryMode::Unspecified | proto::BoundaryMode::Preserve) => BoundaryMode::Preserve,
+            Ok(proto::BoundaryMode::Lock) => BoundaryMode::Lock,
+            Err(_) => return Err(invalid("options.boundary", format!("unknown value {}", o.boundary))),
+        };
+        let defaults = SimplifyOptions::default();
+        Ok(SimplifyOptions {
+            target_faces: o.target_faces.map(|n| n as usize),
+            // Neither target: the engine's default ratio.
+            target_ratio: if o.target_faces.is_none() && o.target_ratio.is_none() {
+                defaults.target_ratio
+            } else {
+                o.target_ratio
+            },
+            max_error: o.max_error,
+            metric,
+            placement,
+            normals,
+            boundary,
+            max_normal_change_degrees: o.max_normal_change_degrees.unwrap_or(defaults.max_normal_change_degrees),
+            record_progressive: o.return_progressive,
+            guard: o.guard.unwrap_or(defaults.guard),
+            cancel: None,
+        })
     }
-    if !(0.0..=2.0).contains(&w) {
-        return Err(invalid("options.w", format!("{w} is outside [0, 2]")));
-    }
-    if let Some(g) = o.guard
-        && !(g.is_finite() && g >= 0.0)
-    {
-        return Err(invalid("options.guard", format!("{g} must be a finite number ≥ 0")));
-    }
-    let target_ratio = match (o.target_faces, o.target_ratio) {
-        (None, None) => Some(0.5),
-        (_, r) => r,
-    };
-    Ok(SimplifyOptions {
-        target_faces: o.target_faces.map(|n| n as usize),
-        target_ratio,
-        max_error: o.max_error,
-        metric,
-        placement,
-        normals,
-        boundary,
-        max_normal_change_degrees: o.max_normal_change_degrees.unwrap_or(90.0),
-        record_progressive: o.return_progressive,
-        guard: o.guard.unwrap_or(0.0),
-        cancel: None,
-    })
 }
 
 /// The proto report of a Hausdorff measurement.

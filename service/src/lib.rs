@@ -1,10 +1,24 @@
-//! meshlod service: the gRPC server, its clients, and the conversions between the public contract
-//! (`proto/meshlod/v1/meshlod.proto`) and the engine. Thin by design: validate, convert, call the
-//! engine off the async runtime, convert back.
+//! meshlod service: the operations behind every front end, the gRPC server and its client, and
+//! the conversions between the public contract (`proto/meshlod/v1/meshlod.proto`) and the engine.
+//!
+//! Modules in the order a request meets them:
+//! - `proto` — the contract's generated types;
+//! - [`convert`] — contract ↔ engine (meshes, options via `TryFrom`, reports), with field paths;
+//! - [`jobs`] — simplify / refine / predict on a mesh in memory, from the contract's options;
+//! - [`executor`] — jobs on files, run here ([`executor::Local`]) or on a server
+//!   ([`client::Remote`]), ending in one [`report`] shape;
+//! - [`server`] — the tonic service, admission control and auth; [`metrics`] its Prometheus text;
+//! - [`predict`] — the predictor's inputs from the engine's features.
+//!
+//! The `meshlod` binary (src/main.rs and its modules) holds the command line and printing only.
 
+pub mod client;
 pub mod convert;
+pub mod executor;
+pub mod jobs;
 pub mod metrics;
 pub mod predict;
+pub mod report;
 pub mod server;
 
 /// Code generated from `proto/meshlod/v1/meshlod.proto`.

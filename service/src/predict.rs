@@ -49,12 +49,3 @@ pub fn advise_features(
 pub fn advise(predictor: &Predictor, mesh: &Mesh, target_faces: usize) -> Result<Advice, PredictorError> {
     advise_features(predictor, &shape_features(mesh), mesh.face_count(), target_faces)
 }
-
-/// Target faces from a face count or a removal ratio (the ratio wins when both are given).
-pub fn target_faces(faces_in: usize, faces: Option<usize>, ratio: Option<f64>) -> Option<usize> {
-    match (faces, ratio) {
-        (_, Some(r)) if (0.0..1.0).contains(&r) => Some(((faces_in as f64) * (1.0 - r)).round().max(1.0) as usize),
-        (Some(n), _) => Some(n.max(1)),
-        _ => None,
-    }
-}

@@ -127,13 +127,26 @@ pub fn write_mesh_to(mut out: impl Write, mesh: &Mesh, format: MeshFormat) -> st
     }
 }
 
-/// Writes a mesh to a file whose extension (`.obj` or `.ply`) picks the format.
-pub fn write_mesh(path: impl AsRef<Path>, mesh: &Mesh) -> Result<(), MeshError> {
+/// The format an output file asks for by its extension, checked before any work is done: a
+/// known extension, and a folder that exists.
+pub fn output_format(path: impl AsRef<Path>) -> Result<MeshFormat, MeshError> {
     let path = path.as_ref();
     let format = MeshFormat::from_extension(path).ok_or_else(|| MeshError::UnsupportedFormat {
         path: PathBuf::from(path),
         reason: "output extension must be .obj or .ply".into(),
     })?;
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty())
+        && !parent.is_dir()
+    {
+        return Err(MeshError::Io { path: PathBuf::from(path), message: "its folder does not exist".into() });
+    }
+    Ok(format)
+}
+
+/// Writes a mesh to a file whose extension (`.obj` or `.ply`) picks the format.
+pub fn write_mesh(path: impl AsRef<Path>, mesh: &Mesh) -> Result<(), MeshError> {
+    let path = path.as_ref();
+    let format = output_format(path)?;
     let file = std::fs::File::create(path).map_err(|e| io_error(path, e))?;
     let mut writer = std::io::BufWriter::new(file);
     write_mesh_to(&mut writer, mesh, format).map_err(|e| io_error(path, e))?;

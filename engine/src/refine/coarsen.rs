@@ -123,9 +123,8 @@ pub(crate) fn coarsen(
         })
         .collect();
     let mut rings = RingCache::new(vertex_count);
-    let face_energy = |state: &State, energy: &[f64], f: u32| -> f64 {
-        state.triangles[f as usize].iter().map(|&v| energy[v as usize]).sum()
-    };
+    let face_energy =
+        |state: &State, energy: &[f64], f: u32| -> f64 { state.triangle(f).iter().map(|&v| energy[v as usize]).sum() };
     let mut face_version = vec![0u32; mesh.face_count()];
     let key = |e: f64| Reverse(e.max(0.0).to_bits());
     let mut heap: BinaryHeap<(Reverse<u64>, Reverse<u32>, u32)> =
@@ -149,7 +148,7 @@ pub(crate) fn coarsen(
             return Err(MeshError::Cancelled);
         }
         let Some((Reverse(bits), Reverse(f), version)) = heap.pop() else { break };
-        if !state.face_alive[f as usize] || version != face_version[f as usize] {
+        if !state.is_face_alive(f) || version != face_version[f as usize] {
             continue;
         }
         let e = f64::from_bits(bits);
@@ -157,8 +156,8 @@ pub(crate) fn coarsen(
             break;
         }
         popped.push(e);
-        let t = state.triangles[f as usize];
-        let kinds = t.map(|v| state.vertices[v as usize].kind);
+        let t = state.triangle(f);
+        let kinds = t.map(|v| state.kind(v));
         if kinds.contains(&VertexKind::Frozen) || kinds.iter().filter(|&&k| k == VertexKind::Boundary).count() >= 2 {
             continue;
         }
@@ -166,22 +165,24 @@ pub(crate) fn coarsen(
         let mut candidates: Vec<_> =
             [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])].iter().filter_map(|&(x, y)| state.evaluate(x, y)).collect();
         candidates.sort_by(|x, y| x.cost.total_cmp(&y.cost));
-        let Some(first) = candidates.into_iter().find(|c| state.is_legal(c)) else { continue };
-        let third = *t.iter().find(|&&v| v != first.survivor && v != first.removed).expect("three");
-        let record = state.collapse(&first);
+        let Some(first) = candidates.into_iter().find_map(|c| state.is_legal(&c).ok()) else { continue };
+        let (kept, gone) = (first.candidate().survivor, first.candidate().removed);
+        let third = *t.iter().find(|&&v| v != kept && v != gone).expect("three");
+        let record = state.collapse(first);
         faces_alive -= (record.left_face != u32::MAX) as usize + (record.right_face != u32::MAX) as usize;
         collapses += 1;
-        let mut survivor = first.survivor;
+        let mut survivor = kept;
         // Step 2: merge the third vertex at the optimum of all three quadrics.
         if faces_alive > target_faces
-            && state.vertex_alive[third as usize]
+            && state.is_vertex_alive(third)
             && let Some(second) = state.evaluate(survivor.min(third), survivor.max(third))
-            && state.is_legal(&second)
+            && let Ok(second) = state.is_legal(&second)
         {
-            let record = state.collapse(&second);
+            let next = second.candidate().survivor;
+            let record = state.collapse(second);
             faces_alive -= (record.left_face != u32::MAX) as usize + (record.right_face != u32::MAX) as usize;
             collapses += 1;
-            survivor = second.survivor;
+            survivor = next;
         }
         // Local energy update: mean lengths of the survivor and its ring, energies of the 2-ring.
         rings.clear();
@@ -207,8 +208,7 @@ pub(crate) fn coarsen(
         }
         // Each face around the touched vertices is re-queued once.
         for &v in &touched {
-            for c in &state.fans[v as usize] {
-                let g = c.face;
+            for g in state.faces_around(v) {
                 if std::mem::replace(&mut face_mark[g as usize], stamp) != stamp {
                     face_version[g as usize] = face_version[g as usize].wrapping_add(1);
                     heap.push((key(face_energy(&state, &energy, g)), Reverse(g), face_version[g as usize]));
@@ -219,9 +219,7 @@ pub(crate) fn coarsen(
         // one linear sweep once they outnumber the live faces three to one (the queue's order is
         // total, so what pops next is unchanged).
         if heap.len() > 4 * faces_alive {
-            heap.retain(|&(_, Reverse(f), version)| {
-                state.face_alive[f as usize] && version == face_version[f as usize]
-            });
+            heap.retain(|&(_, Reverse(f), version)| state.is_face_alive(f) && version == face_version[f as usize]);
         }
     }
     Ok(Coarsened { mesh: state.output_mesh(), collapses, popped })

@@ -195,7 +195,7 @@ pub fn refine(mesh: &Mesh, options: &RefineOptions) -> Result<Refined, MeshError
         return Err(MeshError::InvalidParameter { name: "etc", reason: "give an ETC or a target face count".into() });
     }
     if options.target_faces == Some(0) {
-        return Err(MeshError::InvalidParameter { name: "faces", reason: "target must be at least 1".into() });
+        return Err(MeshError::InvalidParameter { name: "target_faces", reason: "target must be at least 1".into() });
     }
     let faces_in = prepared.face_count();
     // Every face of the output exists in memory: refuse targets whose ETC search could not end.
@@ -205,7 +205,7 @@ pub fn refine(mesh: &Mesh, options: &RefineOptions) -> Result<Refined, MeshError
         && t > limit
     {
         return Err(MeshError::InvalidParameter {
-            name: "faces",
+            name: "target_faces",
             reason: format!("{t} faces need more than {} rounds of 1→4 subdivision from {faces_in}", options.rounds),
         });
     }

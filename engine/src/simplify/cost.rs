@@ -1,0 +1,63 @@
+//! The collapse cost of an edge: QFVP's normal factor, Melax's curvature term, and the candidate
+//! the metric prefers ([`State::evaluate`]), its placement chosen in `placement.rs`.
+
+use super::kernel::{State, VertexData, to_f32};
+use super::placement::Keep;
+
+/// A collapse ready to apply: `removed` merges into `survivor`, which moves to `position`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Candidate {
+    pub(crate) cost: f64,
+    pub(crate) survivor: u32,
+    pub(crate) removed: u32,
+    pub(crate) position: [f32; 3],
+}
+
+impl State<'_> {
+    /// The collapse of edge {a, b} the metric prefers, or `None` if the rules forbid every
+    /// direction and placement. Geometry-independent rules only; the rest is in `is_legal`.
+    pub(crate) fn evaluate(&self, a: u32, b: u32) -> Option<Candidate> {
+        let choice = self.choose(a, b)?;
+        let (survivor, removed) = match choice.keep {
+            Keep::A => (a, b),
+            Keep::B => (b, a),
+            // The survivor of a moving collapse: the endpoint that already has more faces, so
+            // fewer faces change corners (smaller vertex split).
+            Keep::Larger if self.fans[a as usize].len() >= self.fans[b as usize].len() => (a, b),
+            Keep::Larger => (b, a),
+        };
+        Some(Candidate { cost: choice.cost, survivor, removed, position: to_f32(choice.position) })
+    }
+
+    /// QFVP's normal term `(1 − cos θ)^w` of an edge with these endpoints (1 for QEM and w = 0).
+    #[inline]
+    pub(super) fn normal_factor(&self, va: &VertexData, vb: &VertexData) -> f64 {
+        let w = self.options.metric.w().unwrap_or(0.0);
+        if w == 0.0 {
+            return 1.0;
+        }
+        let x = 1.0 - va.normal.dot(vb.normal).clamp(-1.0, 1.0);
+        match w {
+            0.5 => x.sqrt(),
+            1.0 => x,
+            1.5 => x * x.sqrt(),
+            2.0 => x * x,
+            _ => x.powf(w),
+        }
+    }
+
+    /// Melax's cost of moving `u` onto `v`: |u − v| × max over faces f at u of
+    /// min over faces n on edge uv of (1 − f·n) / 2.
+    pub(super) fn melax_cost(&self, u: u32, v: u32) -> f64 {
+        let length = (self.point(u) - self.point(v)).length();
+        let (shared, count) = self.edge_corners(u, v);
+        let shared = &shared[..count.min(2)];
+        let mut curvature: f64 = 0.0;
+        for c in &self.fans[u as usize] {
+            let nf = self.face_normal(c.face);
+            let min = shared.iter().map(|s| (1.0 - nf.dot(self.face_normal(s.face))) / 2.0).fold(1.0f64, f64::min);
+            curvature = curvature.max(min);
+        }
+        length * curvature
+    }
+}

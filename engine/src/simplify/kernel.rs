@@ -1,0 +1,493 @@
+//! The working state of a run and the collapse itself: fans, per-vertex data, alive flags and
+//! version stamps, built from a prepared mesh ([`State::new`]) and changed only by
+//! [`State::collapse`]. Other modules of the crate (the refiner's triangle collapse) use the
+//! narrow API below, never the fields.
+
+use glam::DVec3;
+
+use crate::fan::{Corner, FanSlot};
+use crate::mesh::Mesh;
+use crate::pm::CollapseRecord;
+use crate::prefetch::prefetch;
+use crate::quadric::Quadric;
+
+use super::classify::{Scan, VertexKind, scan_fans};
+use super::guard::DistanceGuard;
+use super::legality::{CONE_MIN_QUALITY, Legal, NormalCone, triangle_quality};
+use super::options::{BoundaryMode, NormalUpdate, SimplifyOptions};
+
+/// Weight of the boundary-constraint planes relative to the face planes.
+const BOUNDARY_WEIGHT: f64 = 10.0;
+
+pub(crate) const NONE: u32 = u32::MAX;
+
+/// Mutable state of one run: the algorithm owns it; nothing is left attached to the input mesh.
+pub(crate) struct State<'o> {
+    pub(super) options: &'o SimplifyOptions,
+    /// Quadric, normal, position and class of each vertex (see [`VertexData`]).
+    pub(super) vertices: Vec<VertexData>,
+    /// Each face's corners, kept current by every collapse while `track_triangles` is set; the
+    /// simplifier's own loop does without (the fans carry what the loop reads: the state is made
+    /// without the array) and builds it once at the end from the log
+    /// ([`State::rebuild_triangles`]).
+    pub(super) triangles: Vec<[u32; 3]>,
+    pub(super) track_triangles: bool,
+    pub(super) face_alive: Vec<bool>,
+    /// The live faces around each vertex, with their other two corners.
+    pub(super) fans: Vec<FanSlot>,
+    pub(super) vertex_alive: Vec<bool>,
+    pub(super) version: Vec<u32>,
+    /// Scratch marks for the link condition.
+    pub(super) mark: Vec<u32>,
+    pub(super) mark_stamp: u32,
+    /// Scratch for the fold check: the two other corners and the new unit normal of each face.
+    pub(super) fan_scratch: Vec<([u32; 2], DVec3)>,
+    /// Scratch for the fold check: for a ring vertex x, the index in `fan_scratch` of the face
+    /// whose far edge starts at x (valid only where that face's far edge does start at x).
+    pub(super) spoke: Vec<u32>,
+    /// Counts the calls of `is_legal`: a [`Legal`] token from the latest call (the one whose new
+    /// face normals `fan_scratch` holds) carries the current count.
+    pub(super) check_id: u32,
+    pub(super) cos_max_normal_change: f64,
+    /// What the distance guard measures with, when it is on.
+    pub(super) guard: Option<DistanceGuard>,
+}
+
+/// What ranking an edge reads of each endpoint, in one 128-byte block (two adjacent cache lines)
+/// rather than a line or two in each of four arrays. The cost is evaluated about twelve times per
+/// collapse, mostly with a neighbour whose data is not in cache. On stanford-bunny (whose vertex
+/// order is far from its surface order) this took cost evaluation's simulated L2 misses from 904 k to
+/// 392 k and the run's time down by 10–20%; on meshes stored in surface order it gains less
+/// (docs/benchmarks.md).
+#[derive(Debug, Clone, Copy, Default)]
+#[repr(C, align(64))]
+pub(super) struct VertexData {
+    pub(super) quadric: Quadric,
+    /// Unit vertex normal: Gouraud at the start, then the linear estimate (or the recomputed mean).
+    pub(super) normal: DVec3,
+    pub(super) position: [f32; 3],
+    pub(super) kind: VertexKind,
+    /// A lower bound on the cosine between `normal` and the unit normal of every live face around
+    /// the vertex ([`NormalCone`]), in the block's last spare bytes.
+    pub(super) cone: NormalCone,
+}
+
+const _: () = assert!(std::mem::size_of::<VertexData>() == 128);
+
+impl VertexData {
+    /// Asks the cache for both lines of the block (the quadric starts the first; normal, position,
+    /// class and cone fill the second).
+    #[inline]
+    pub(crate) fn prefetch(&self) {
+        prefetch(&self.quadric);
+        prefetch(&self.position);
+    }
+}
+
+#[inline]
+pub(super) fn to_f64(p: [f32; 3]) -> DVec3 {
+    DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+}
+
+#[inline]
+pub(super) fn to_f32(p: DVec3) -> [f32; 3] {
+    [p.x as f32, p.y as f32, p.z as f32]
+}
+
+impl<'o> State<'o> {
+    /// Working state for `mesh` (prepared: no repeated-index faces, no unreferenced vertices):
+    /// fans, vertex classes, area-weighted quadrics with boundary constraint planes, Gouraud
+    /// normals. Also returns every undirected edge once, as `[low, high]`, sorted.
+    pub(crate) fn new(mesh: &Mesh, options: &'o SimplifyOptions) -> (State<'o>, Vec<[u32; 2]>) {
+        State::with_tracking(mesh, options, true)
+    }
+
+    /// [`State::new`], keeping the triangle array current through the collapses or (without
+    /// `track`) leaving it empty until [`State::rebuild_triangles`].
+    pub(crate) fn with_tracking(mesh: &Mesh, options: &'o SimplifyOptions, track: bool) -> (State<'o>, Vec<[u32; 2]>) {
+        let vertex_count = mesh.vertex_count();
+        // The passes over the faces below write to their corners' fans and blocks, in the input's
+        // vertex order, which can be far from its face order: each asks for the data of the face
+        // `AHEAD` places on while it works on this one.
+        const AHEAD: usize = 8;
+        let mut fans = vec![FanSlot::default(); vertex_count];
+        for (f, &[x, y, z]) in mesh.triangles.iter().enumerate() {
+            if let Some(t) = mesh.triangles.get(f + AHEAD) {
+                t.iter().for_each(|&v| fans[v as usize].prefetch());
+            }
+            let face = f as u32;
+            fans[x as usize].push(Corner { face, next: y, prev: z });
+            fans[y as usize].push(Corner { face, next: z, prev: x });
+            fans[z as usize].push(Corner { face, next: x, prev: y });
+        }
+        let Scan { kind, edges, boundary_edges } = scan_fans(&fans);
+
+        let mut state = State {
+            options,
+            vertices: mesh
+                .positions
+                .iter()
+                .zip(kind)
+                .map(|(&position, kind)| VertexData { position, kind, ..Default::default() })
+                .collect(),
+            triangles: if track { mesh.triangles.clone() } else { Vec::new() },
+            track_triangles: track,
+            face_alive: vec![true; mesh.face_count()],
+            fans,
+            vertex_alive: vec![true; vertex_count],
+            version: vec![0; vertex_count],
+            mark: vec![0; vertex_count],
+            mark_stamp: 0,
+            fan_scratch: Vec::new(),
+            spoke: vec![0; vertex_count],
+            check_id: 0,
+            cos_max_normal_change: options.max_normal_change_degrees.to_radians().cos(),
+            guard: None,
+        };
+        if options.guard > 0.0 {
+            state.guard = DistanceGuard::new(mesh, &state.fans);
+        }
+        if options.boundary == BoundaryMode::Lock {
+            for vertex in state.vertices.iter_mut() {
+                if vertex.kind == VertexKind::Boundary {
+                    vertex.kind = VertexKind::Frozen;
+                }
+            }
+        }
+        // Quadrics: area-weighted face planes, plus boundary planes perpendicular to boundary faces.
+        // Vertex normals (Gouraud: the mean of the unit normals of the faces around) gathered in the
+        // same pass, and each face's unit normal kept for the normal cones, which need the vertex
+        // normals first: NaN where the face is too poor for a cone (NaN makes the cone unusable).
+        let mut face_units = Vec::with_capacity(mesh.face_count());
+        for (f, t) in mesh.triangles.iter().enumerate() {
+            if let Some(t) = mesh.triangles.get(f + AHEAD) {
+                t.iter().for_each(|&v| state.vertices[v as usize].prefetch());
+            }
+            let [pa, pb, pc] = mesh.triangle_points(f);
+            let n = (pb - pa).cross(pc - pa);
+            let area = 0.5 * n.length();
+            if area == 0.0 {
+                face_units.push(DVec3::NAN);
+                continue;
+            }
+            let unit = n / (2.0 * area);
+            let usable = triangle_quality(2.0 * area, pa, pb, pc) >= CONE_MIN_QUALITY;
+            face_units.push(if usable { unit } else { DVec3::NAN });
+            // `n.normalize()` rather than `unit` (equal up to the last bit): the collapse order,
+            // and so the documented figures, follow these exact bits — bunny at 90% moves from
+            // 0.006502 to 0.007331 with `unit` (see docs/simplify-report.md, sensitivity).
+            let q = Quadric::from_plane(n.normalize(), pa, area);
+            for &v in t {
+                let vertex = &mut state.vertices[v as usize];
+                vertex.quadric += q;
+                vertex.normal += unit;
+            }
+        }
+        for vertex in state.vertices.iter_mut() {
+            vertex.normal = vertex.normal.normalize_or_zero();
+        }
+        for (f, (t, &unit)) in mesh.triangles.iter().zip(&face_units).enumerate() {
+            if let Some(t) = mesh.triangles.get(f + AHEAD) {
+                t.iter().for_each(|&v| prefetch(&state.vertices[v as usize].normal));
+            }
+            for &v in t {
+                let vertex = &mut state.vertices[v as usize];
+                vertex.cone.widen(vertex.normal, unit);
+            }
+        }
+        for &(a, b, f) in &boundary_edges {
+            let [p0, p1, p2] = mesh.triangle_points(f as usize);
+            let face_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+            let (pa, pb) = (mesh.point(a), mesh.point(b));
+            let edge = pb - pa;
+            let plane_normal = edge.cross(face_normal).normalize_or_zero();
+            if plane_normal == DVec3::ZERO {
+                continue;
+            }
+            let q = Quadric::constraint(plane_normal, pa, BOUNDARY_WEIGHT * edge.length_squared());
+            state.vertices[a as usize].quadric += q;
+            state.vertices[b as usize].quadric += q;
+        }
+        (state, edges)
+    }
+
+    /// Brings `triangles` up to date after a run without tracking: every corner names the vertex
+    /// its input vertex was merged into, last merge first (the same as renaming at each collapse).
+    /// Built from the input's triangles (`mesh`, the one the state was made from): the state
+    /// holds no copy while it does not track them.
+    pub(crate) fn rebuild_triangles(&mut self, mesh: &Mesh, log: &[CollapseRecord]) {
+        if self.track_triangles {
+            return;
+        }
+        let mut last: Vec<u32> = (0..self.vertices.len() as u32).collect();
+        for record in log.iter().rev() {
+            last[record.removed as usize] = last[record.survivor as usize];
+        }
+        self.triangles = mesh.triangles.iter().map(|t| t.map(|v| last[v as usize])).collect();
+        self.track_triangles = true;
+    }
+
+    /// The surviving mesh: live vertices in input order, live faces in input order.
+    pub(crate) fn output_mesh(&self) -> Mesh {
+        let mut new_index = vec![NONE; self.vertices.len()];
+        let mut positions = Vec::new();
+        for (v, slot) in new_index.iter_mut().enumerate() {
+            if self.vertex_alive[v] && !self.fans[v].is_empty() {
+                *slot = positions.len() as u32;
+                positions.push(self.vertices[v].position);
+            }
+        }
+        let triangles: Vec<[u32; 3]> = (0..self.triangles.len())
+            .filter(|&f| self.face_alive[f])
+            .map(|f| self.triangles[f].map(|v| new_index[v as usize]))
+            .collect();
+        let mesh = Mesh { positions, triangles, corners: Default::default() };
+        debug_assert!(mesh.check().is_ok());
+        mesh
+    }
+
+    pub(crate) fn point(&self, v: u32) -> DVec3 {
+        to_f64(self.vertices[v as usize].position)
+    }
+
+    pub(crate) fn face_normal(&self, f: u32) -> DVec3 {
+        debug_assert!(self.track_triangles, "the triangle array is not being kept current");
+        let [a, b, c] = self.triangles[f as usize];
+        let (pa, pb, pc) = (self.point(a), self.point(b), self.point(c));
+        (pb - pa).cross(pc - pa).normalize_or_zero()
+    }
+
+    /// Mean of the unit normals of the faces around `v` (Gouraud).
+    pub(crate) fn fan_normal(&self, v: u32) -> DVec3 {
+        let p = self.point(v);
+        let sum: DVec3 = self.fans[v as usize]
+            .iter()
+            .map(|c| (self.point(c.next) - p).cross(self.point(c.prev) - p).normalize_or_zero())
+            .sum();
+        sum.normalize_or_zero()
+    }
+
+    /// Faces on edge (a, b), as corners of `a`'s fan, and how many there are.
+    pub(super) fn edge_corners(&self, a: u32, b: u32) -> ([Corner; 2], usize) {
+        self.fans[a as usize].touching(b)
+    }
+
+    /// Asks the cache, all at once, for what the checks, the collapse of (a, b) and the re-ranking
+    /// of its edges will read of the ring around the edge: each neighbour's block (both lines) and
+    /// fan. The misses then overlap instead of following one another through the data-dependent
+    /// branches of the checks (real loads did this too, 3–7% less well: they stall the core).
+    #[inline]
+    pub(super) fn prefetch_ring(&self, a: u32, b: u32) {
+        // Not a nor b (each is a `next` around the other: their data is in cache already). A
+        // hint that has to wait for a free fill buffer stalls the core, so none is wasted.
+        for (v, other) in [(a, b), (b, a)] {
+            for corner in &self.fans[v as usize] {
+                let x = corner.next;
+                if x != other {
+                    self.vertices[x as usize].prefetch();
+                    self.fans[x as usize].prefetch();
+                }
+            }
+        }
+    }
+
+    /// Asks the cache for what checking the collapse of (a, b) reads first: the version stamps,
+    /// both lines of each endpoint's block and both lines of each fan (the fan after `v`'s starts
+    /// where `v`'s ends). A hint only: it never faults and changes nothing.
+    #[inline]
+    pub(super) fn prefetch_edge(&self, a: u32, b: u32) {
+        for v in [a as usize, b as usize] {
+            prefetch(&self.version[v]);
+            self.vertices[v].prefetch();
+            self.fans[v].prefetch();
+        }
+    }
+
+    /// Applies a legal collapse and returns its log record.
+    pub(crate) fn collapse(&mut self, legal: Legal) -> CollapseRecord {
+        let scratch_is_current = legal.check == self.check_id;
+        let c = &legal.candidate;
+        let (a, b) = (c.survivor, c.removed);
+        let (shared, shared_count) = self.edge_corners(a, b);
+        let mut record = CollapseRecord {
+            survivor: a,
+            removed: b,
+            left: NONE,
+            right: NONE,
+            left_face: NONE,
+            right_face: NONE,
+            survivor_position: self.vertices[a as usize].position,
+            removed_position: self.vertices[b as usize].position,
+            collapsed_position: c.position,
+            error: 0.0,
+        };
+        let mut dead = [NONE; 2];
+        for (slot, corner) in dead.iter_mut().zip(&shared[..shared_count]) {
+            let (f, third) = (corner.face, corner.other(b));
+            // The face with half-edge a→b is the left face of the split (vs = a, vt = b).
+            if corner.next == b {
+                record.left = third;
+                record.left_face = f;
+            } else {
+                record.right = third;
+                record.right_face = f;
+            }
+            self.face_alive[f as usize] = false;
+            *slot = f;
+            let fan = &mut self.fans[third as usize];
+            if let Some(i) = fan.find_face(f) {
+                fan.remove(i);
+            }
+        }
+        let is_dead = |d: &Corner| (d.face == dead[0]) | (d.face == dead[1]);
+        self.fans[a as usize].retain(|d| !is_dead(d));
+        let moved = std::mem::take(&mut self.fans[b as usize]);
+        let count_a = self.fans[a as usize].len() as f64;
+        // b's fan holds each face at b once, the shared faces among them.
+        let count_b = moved.len() - shared_count;
+        debug_assert_eq!(count_b, moved.iter().filter(|d| !is_dead(d)).count());
+        for corner in moved.iter().filter(|d| !is_dead(d)) {
+            let f = corner.face;
+            if self.track_triangles {
+                for slot in self.triangles[f as usize].iter_mut() {
+                    if *slot == b {
+                        *slot = a;
+                    }
+                }
+            }
+            // The face's corners at its two other vertices name b: they now name a.
+            for x in [corner.next, corner.prev] {
+                let fan = &mut self.fans[x as usize];
+                if let Some(d) = fan.find_face(f).map(|i| &mut fan[i]) {
+                    // One of the two names b: which one is as good as random, so no branch.
+                    d.next = if d.next == b { a } else { d.next };
+                    d.prev = if d.prev == b { a } else { d.prev };
+                }
+            }
+            self.fans[a as usize].push(*corner);
+        }
+        self.vertex_alive[b as usize] = false;
+        let removed = self.vertices[b as usize];
+        let survivor = &mut self.vertices[a as usize];
+        survivor.position = c.position;
+        survivor.quadric += removed.quadric;
+        // The linear estimate, unless it cancels out (opposite normals): then Gouraud on the new fan.
+        let linear = (survivor.normal * count_a + removed.normal * count_b as f64).normalize_or_zero();
+        self.vertices[a as usize].normal = match self.options.normals {
+            NormalUpdate::Linear if linear != DVec3::ZERO => linear,
+            NormalUpdate::Linear | NormalUpdate::Recompute => self.fan_normal(a),
+        };
+        self.update_cones(a, scratch_is_current);
+        self.update_guard(a, b);
+        self.version[a as usize] = self.version[a as usize].wrapping_add(1);
+        self.version[b as usize] = self.version[b as usize].wrapping_add(1);
+        record
+    }
+
+    /// Keeps the [`NormalCone`]s exact after `a` moved and took over faces: each face around `a`
+    /// widens the cones of its two other corners, and `a`'s own cone is rebuilt around its new
+    /// normal from these faces alone (they are all its faces). With `checked`, the new normals are
+    /// the ones [`State::is_legal`] just computed for this collapse (its scratch holds exactly the
+    /// faces of `a`'s new fan); otherwise they are computed here.
+    pub(super) fn update_cones(&mut self, a: u32, checked: bool) {
+        let axis = self.vertices[a as usize].normal;
+        let mut cone = NormalCone::EMPTY;
+        if checked {
+            debug_assert_eq!(self.fan_scratch.len(), self.fans[a as usize].len());
+            for &([x, y], n) in &self.fan_scratch {
+                cone.widen(axis, n);
+                for v in [x, y] {
+                    let vertex = &mut self.vertices[v as usize];
+                    vertex.cone.widen(vertex.normal, n);
+                }
+            }
+            self.vertices[a as usize].cone = cone;
+            return;
+        }
+        let p = self.point(a);
+        for i in 0..self.fans[a as usize].len() {
+            let Corner { next: x, prev: y, .. } = self.fans[a as usize][i];
+            let (px, py) = (self.point(x), self.point(y));
+            let cross = (px - p).cross(py - p);
+            let area2 = cross.length();
+            // `is_legal` refuses collapses that make a face this poor; a caller that skipped it
+            // gets cones that never rule a fold out, not wrong ones.
+            if area2 == 0.0 || triangle_quality(area2, p, px, py) < CONE_MIN_QUALITY {
+                cone = NormalCone::NEVER;
+                self.vertices[x as usize].cone = NormalCone::NEVER;
+                self.vertices[y as usize].cone = NormalCone::NEVER;
+                continue;
+            }
+            let n = cross / area2;
+            cone.widen(axis, n);
+            for v in [x, y] {
+                let vertex = &mut self.vertices[v as usize];
+                vertex.cone.widen(vertex.normal, n);
+            }
+        }
+        self.vertices[a as usize].cone = cone;
+    }
+
+    /// A fresh stamp for the scratch marks (every mark is older).
+    pub(super) fn next_stamp(&mut self) -> u32 {
+        self.mark_stamp = self.mark_stamp.wrapping_add(2);
+        if self.mark_stamp < 2 {
+            self.mark.iter_mut().for_each(|m| *m = 0);
+            self.mark_stamp = 2;
+        }
+        self.mark_stamp
+    }
+
+    /// The one-ring of `v`, sorted, into `out`.
+    pub(crate) fn neighbours(&self, v: u32, out: &mut Vec<u32>) {
+        // Around a closed manifold fan every neighbour is the `next` corner of exactly one face, so
+        // those alone are the ring; an open fan adds its last `prev`. Sorting the `next` corners
+        // and adding only the missing `prev` ones sorts half as much as sorting both.
+        let fan = &self.fans[v as usize];
+        out.clear();
+        out.extend(fan.iter().map(|c| c.next));
+        out.sort_unstable();
+        out.dedup();
+        let nexts = out.len();
+        for c in fan {
+            let missing = if nexts <= 16 {
+                !out[..nexts].contains(&c.prev)
+            } else {
+                out[..nexts].binary_search(&c.prev).is_err()
+            };
+            if missing {
+                out.push(c.prev);
+            }
+        }
+        if out.len() > nexts {
+            out.sort_unstable();
+            out.dedup();
+        }
+    }
+
+    /// Corners of face `f` (kept current only for a state made with [`State::new`]).
+    pub(crate) fn triangle(&self, f: u32) -> [u32; 3] {
+        debug_assert!(self.track_triangles, "the triangle array is not being kept current");
+        self.triangles[f as usize]
+    }
+
+    /// Whether face `f` is still in the mesh.
+    pub(crate) fn is_face_alive(&self, f: u32) -> bool {
+        self.face_alive[f as usize]
+    }
+
+    /// Whether vertex `v` is still in the mesh.
+    pub(crate) fn is_vertex_alive(&self, v: u32) -> bool {
+        self.vertex_alive[v as usize]
+    }
+
+    /// The class of vertex `v`, fixed at the start.
+    pub(crate) fn kind(&self, v: u32) -> VertexKind {
+        self.vertices[v as usize].kind
+    }
+
+    /// The live faces around vertex `v`.
+    pub(crate) fn faces_around(&self, v: u32) -> impl Iterator<Item = u32> + '_ {
+        self.fans[v as usize].iter().map(|c| c.face)
+    }
+}

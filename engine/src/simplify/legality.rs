@@ -1,0 +1,309 @@
+//! Whether a collapse keeps the surface valid, rule by rule in the order of the module doc
+//! (`super`), each refusal named ([`Refusal`]); a collapse that passes comes back as a [`Legal`]
+//! token, the only thing [`State::collapse`] accepts.
+
+use glam::DVec3;
+
+use super::classify::VertexKind;
+use super::cost::Candidate;
+use super::kernel::{NONE, State, to_f64};
+use super::options::Refusal;
+
+/// A collapse that passed [`State::is_legal`]: the only way to ask for [`State::collapse`]. It
+/// names the check that passed it, so the collapse knows whether that check's new face normals
+/// (the state's scratch) are still the ones for this collapse.
+#[derive(Debug)]
+pub(crate) struct Legal {
+    pub(super) candidate: Candidate,
+    pub(super) check: u32,
+}
+
+impl Legal {
+    /// The collapse that was checked.
+    pub(crate) fn candidate(&self) -> &Candidate {
+        &self.candidate
+    }
+}
+
+/// Smallest `4√3·area / Σ edge²` (1 for an equilateral triangle) a collapse may create.
+pub const MIN_TRIANGLE_QUALITY: f64 = 1e-3;
+
+/// Two faces sharing an edge at the merged vertex may not end up with normals whose dot product is
+/// below this (a fold of more than ~154°).
+pub const FOLD_DOT: f64 = -0.9;
+
+/// Whether two faces of a new fan (far edge, unit normal) that share a vertex other than the
+/// merged one turn back onto each other: every pair looked at, the reference for the one-pass
+/// check in [`State::is_legal`].
+fn folds_pairwise(fan: &[([u32; 2], DVec3)]) -> bool {
+    (0..fan.len()).any(|i| {
+        (i + 1..fan.len()).any(|j| {
+            let ([a, b], ni) = fan[i];
+            let ([c, d], nj) = fan[j];
+            (a == c || a == d || b == c || b == d) && ni.dot(nj) < FOLD_DOT
+        })
+    })
+}
+
+/// Faces whose quality (`4√3·area / Σ edge²`) is below this at the start make their corners'
+/// [`NormalCone`]s unusable: the normal of such a face depends on which corner its cross product
+/// starts from by more than the cone test's margin. Every face a collapse creates is far above it
+/// ([`MIN_TRIANGLE_QUALITY`]).
+pub(super) const CONE_MIN_QUALITY: f64 = 1e-4;
+
+/// Margin (in cosine) that the cone test keeps from the fold threshold: far more than the rounding
+/// of the unit normals it compares, so a skipped check is one that could not have failed.
+const CONE_MARGIN: f64 = 1e-6;
+
+/// `sin` of the fold angle, `√(1 − FOLD_DOT²)`.
+const FOLD_SIN: f64 = 0.435_889_894_354_067_4;
+
+/// The cosine of the widest angle between a vertex's normal and the normals of the faces around it,
+/// rounded down to a multiple of 1/32767 (so it never claims a narrower cone than there is).
+///
+/// It lets the fold check skip the face across a moved face's far edge (x, y) when no face at x can
+/// be folded onto: if the moved face's new normal is within θ of x's normal and every face at x is
+/// within γ of it, the two normals are at most θ + γ apart, and below the fold angle the check
+/// passes. Reading the face across costs a search of x's fan and the position of a vertex of the
+/// 2-ring, the largest source of cache misses of the whole loop; the cone sits in the block of x,
+/// which the check has just read for x's position. Kept exact by widening the cones of every
+/// vertex of each face a collapse moves ([`State::collapse`]), and recomputed for the survivor,
+/// whose normal changes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct NormalCone(i16);
+
+impl NormalCone {
+    /// No face yet: every normal is within 0° (the first face widens it).
+    pub(super) const EMPTY: NormalCone = NormalCone(i16::MAX);
+    /// Never usable: below −FOLD_DOT's reach, so the test never passes.
+    pub(super) const NEVER: NormalCone = NormalCone(i16::MIN);
+
+    pub(super) fn at_least(cos: f64) -> NormalCone {
+        // One step below the truncated value, so never above `cos` (a float-to-int cast
+        // truncates toward zero and saturates; `floor` would be a library call). `max` maps NaN
+        // to the lowest value, which no test passes.
+        NormalCone((cos * 32767.0 - 1.0).max(NormalCone::NEVER.0 as f64) as i16)
+    }
+
+    pub(super) fn cos(self) -> f64 {
+        self.0 as f64 / 32767.0
+    }
+
+    /// Widens the cone around `axis` to take in the unit normal `n`.
+    pub(super) fn widen(&mut self, axis: DVec3, n: DVec3) {
+        *self = NormalCone(self.0.min(NormalCone::at_least(axis.dot(n)).0));
+    }
+
+    /// Whether no face of this cone (around the unit `axis`) can be folded onto a face with unit
+    /// normal `n`: the angle between `n` and the axis plus the cone's half-angle stays below the
+    /// fold angle, with a margin.
+    #[inline]
+    pub(super) fn excludes_fold(self, axis: DVec3, n: DVec3) -> bool {
+        let d = axis.dot(n);
+        let cos = self.cos();
+        // With √(1 − d²) ≤ 1 first (no square root): enough for the usual nearly flat fan.
+        d >= FOLD_DOT + CONE_MARGIN
+            && (cos >= FOLD_DOT * d + FOLD_SIN + CONE_MARGIN
+                || cos >= FOLD_DOT * d + FOLD_SIN * (1.0 - d * d).max(0.0).sqrt() + CONE_MARGIN)
+    }
+}
+
+impl Default for NormalCone {
+    fn default() -> Self {
+        NormalCone::EMPTY
+    }
+}
+
+/// `4√3·area / Σ edge²`: 1 for equilateral, 0 for degenerate; `area2` is twice the area (the
+/// length of the edge cross product, which the caller has at hand).
+#[inline]
+pub(super) fn triangle_quality(area2: f64, a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let sum = (b - a).length_squared() + (c - b).length_squared() + (a - c).length_squared();
+    if sum > 0.0 { 2.0 * 3f64.sqrt() * area2 / sum } else { 0.0 }
+}
+
+impl State<'_> {
+    /// Rules 3–6 of the module doc for a candidate, in that order: the [`Legal`] token that
+    /// [`State::collapse`] takes, or the rule that refuses it.
+    pub(crate) fn is_legal(&mut self, c: &Candidate) -> Result<Legal, Refusal> {
+        self.check_id = self.check_id.wrapping_add(1);
+        let (a, b) = (c.survivor, c.removed);
+        self.prefetch_ring(a, b);
+        // Rule 3, link condition: the edge has one or two faces, and the common neighbours of its
+        // ends are exactly the opposite vertices of those faces.
+        let (shared, shared_count) = self.edge_corners(a, b);
+        if shared_count == 0 || shared_count > 2 {
+            return Err(Refusal::Link);
+        }
+        let opposite = [shared[0].other(b), if shared_count == 2 { shared[1].other(b) } else { NONE }];
+        let stamp = self.next_stamp();
+        for corner in &self.fans[a as usize] {
+            self.mark[corner.next as usize] = stamp;
+            self.mark[corner.prev as usize] = stamp;
+        }
+        // Counted without a branch on the data (whether a neighbour of b is one of a's is as good
+        // as random): each common neighbour once, and whether any is not opposite the edge.
+        let mut common = 0;
+        let mut stray = false;
+        for corner in &self.fans[b as usize] {
+            for v in [corner.next, corner.prev] {
+                let mark = &mut self.mark[v as usize];
+                let hit = (v != a) & (*mark == stamp);
+                *mark = if hit { stamp.wrapping_sub(1) } else { *mark }; // count each neighbour once
+                stray |= hit & (v != opposite[0]) & (v != opposite[1]);
+                common += hit as usize;
+            }
+        }
+        if stray || common != shared_count {
+            return Err(Refusal::Link);
+        }
+        // Rule 3, the merged vertex keeps enough faces.
+        let remaining = self.fans[a as usize].len() + self.fans[b as usize].len() - 2 * shared_count;
+        let interior = self.vertices[a as usize].kind == VertexKind::Interior
+            && self.vertices[b as usize].kind == VertexKind::Interior;
+        if remaining < if interior { 3 } else { 1 } {
+            return Err(Refusal::TooFewFaces);
+        }
+        // Rules 4–6 on each surviving face: normal change, needle, fold onto the face across.
+        let p = to_f64(c.position);
+        let mut fan = std::mem::take(&mut self.fan_scratch);
+        fan.clear();
+        for (v, other) in [(a, b), (b, a)] {
+            let pv = self.point(v);
+            for corner in &self.fans[v as usize] {
+                if corner.touches(other) {
+                    continue;
+                }
+                let (x, y) = (corner.next, corner.prev);
+                let (px, py) = (self.point(x), self.point(y));
+                let n_old = (px - pv).cross(py - pv);
+                let n_new = (px - p).cross(py - p);
+                let (lo, ln) = (n_old.length(), n_new.length());
+                // (A zero-area new face passes this test and fails the next.)
+                if lo > 0.0 && n_old.dot(n_new) < self.cos_max_normal_change * lo * ln {
+                    self.fan_scratch = fan;
+                    return Err(Refusal::NormalChange);
+                }
+                if ln == 0.0 || triangle_quality(ln, p, px, py) < MIN_TRIANGLE_QUALITY {
+                    self.fan_scratch = fan;
+                    return Err(Refusal::Needle);
+                }
+                let n_new = n_new / ln;
+                // The face across the far edge (x, y) keeps its normal; the moved face must not
+                // fold onto it. Looked at only when the cones of x and y cannot rule that out.
+                let (vx, vy) = (&self.vertices[x as usize], &self.vertices[y as usize]);
+                let ruled_out = vx.cone.excludes_fold(vx.normal, n_new) || vy.cone.excludes_fold(vy.normal, n_new);
+                debug_assert!(!ruled_out || !self.folds_across(corner.face, a, b, [x, y], [px, py], n_new));
+                if !ruled_out && self.folds_across(corner.face, a, b, [x, y], [px, py], n_new) {
+                    self.fan_scratch = fan;
+                    return Err(Refusal::Fold);
+                }
+                fan.push(([x, y], n_new));
+            }
+        }
+        // Rule 6, pairwise: two faces of the new fan that share an edge must not turn back onto each other
+        // (a sequence of small per-face normal changes can otherwise fold a pair over). The link
+        // condition holds, so the new fan is a disk (or half of one) in which the spoke (merged
+        // vertex, x) is the `x` of one face and the `y` of the next: each face finds the face it
+        // follows through `spoke`, indexed by vertex, in one pass without a data-dependent branch
+        // (checking all pairs cost a mispredicted branch per shared edge). A `spoke` entry left by
+        // an earlier check is told apart by the face it names not having that `x`.
+        for (i, &([x, _], _)) in fan.iter().enumerate() {
+            self.spoke[x as usize] = i as u32;
+        }
+        let mut folded = false;
+        for &([_, y], n) in fan.iter() {
+            let before = fan.get(self.spoke[y as usize] as usize);
+            folded |= before.is_some_and(|&([x, _], m)| (x == y) & (m.dot(n) < FOLD_DOT));
+        }
+        debug_assert_eq!(folded, folds_pairwise(&fan), "spoke pairing disagrees with the pairwise check");
+        self.fan_scratch = fan;
+        if folded {
+            return Err(Refusal::Fold);
+        }
+        Ok(Legal { candidate: *c, check: self.check_id })
+    }
+
+    /// Whether the moved face `face` (now with unit normal `n_new`, far edge (x, y) at `px`, `py`)
+    /// folds onto the face across its far edge, which is not a face of the collapsing edge (a, b).
+    pub(super) fn folds_across(
+        &self,
+        face: u32,
+        a: u32,
+        b: u32,
+        [x, y]: [u32; 2],
+        [px, py]: [DVec3; 2],
+        n_new: DVec3,
+    ) -> bool {
+        let across = self.fans[x as usize].iter().find(|d| {
+            d.face != face && d.touches(y) && {
+                let z = d.other(y);
+                z != a && z != b
+            }
+        });
+        across.is_some_and(|d| {
+            // One corner of the face across is y, already at hand: only its third is read.
+            let (pn, pp) = if d.next == y { (py, self.point(d.prev)) } else { (self.point(d.next), py) };
+            let n_across = (pn - px).cross(pp - px).normalize_or_zero();
+            n_across.dot(n_new) < FOLD_DOT
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn random_unit(rng: &mut crate::rng::SplitMix64) -> DVec3 {
+        loop {
+            let v = DVec3::new(rng.next_f64(), rng.next_f64(), rng.next_f64()) * 2.0 - DVec3::ONE;
+            if (0.01..=1.0).contains(&v.length_squared()) {
+                return v.normalize();
+            }
+        }
+    }
+
+    #[test]
+    fn normal_cone_rounds_down_and_refuses_nan() {
+        let mut rng = crate::rng::SplitMix64::new(7);
+        for c in [-1.0, -0.9, 0.0, 0.5, 1.0, 1.0 + 1e-12, -1.0 - 1e-12]
+            .into_iter()
+            .chain((0..1000).map(|_| rng.next_f64() * 2.0 - 1.0))
+        {
+            assert!(NormalCone::at_least(c).cos() <= c, "{c}");
+            assert!(NormalCone::at_least(c).cos() > c - 1e-4, "{c}: too loose");
+        }
+        assert_eq!(NormalCone::at_least(f64::NAN), NormalCone::NEVER);
+        // NEVER rules nothing out, not even a face with the axis' own normal.
+        assert!(!NormalCone::NEVER.excludes_fold(DVec3::Z, DVec3::Z));
+        assert!(NormalCone::EMPTY.excludes_fold(DVec3::Z, DVec3::Z));
+    }
+
+    /// Whenever a cone rules a fold out, no normal it was widened with folds onto the moved face;
+    /// and it does rule out most of the harmless cases and none of the folds.
+    #[test]
+    fn normal_cone_rules_out_only_impossible_folds() {
+        let mut rng = crate::rng::SplitMix64::new(11);
+        let (mut ruled_out, mut folds) = (0, 0);
+        for _ in 0..2000 {
+            let axis = random_unit(&mut rng);
+            // Faces within a random spread of the axis, as around a vertex.
+            let spread = rng.next_f64() * 1.5;
+            let faces: Vec<DVec3> =
+                (0..6).map(|_| (axis + random_unit(&mut rng) * spread * rng.next_f64()).normalize()).collect();
+            let mut cone = NormalCone::EMPTY;
+            faces.iter().for_each(|&f| cone.widen(axis, f));
+            for _ in 0..8 {
+                let n = (axis + random_unit(&mut rng) * rng.next_f64() * 3.0).normalize();
+                let folded = faces.iter().any(|f| f.dot(n) < FOLD_DOT);
+                folds += folded as usize;
+                if cone.excludes_fold(axis, n) {
+                    assert!(!folded, "cone {cone:?} around {axis} ruled out a fold of {n}");
+                    ruled_out += 1;
+                }
+            }
+        }
+        assert!(folds > 100, "the cases include folds ({folds})");
+        assert!(ruled_out > 8000, "the cone rules out most harmless cases ({ruled_out} of 16000)");
+    }
+}

@@ -1,0 +1,165 @@
+//! Edge-collapse simplification with the QFVP, QEM and Melax costs, recorded as a progressive mesh.
+//!
+//! Sources:
+//! - QFVP: the cost `vᵀQv · (1 − cos θ)^w` of the "quadric + feature-vertex-preserving" progressive
+//!   mesh paper (`../shared/papers/qfvp-progressive-mesh.txt`), θ the angle between the normals of
+//!   the two endpoints, w ∈ [0, 2]; w = 0 is plain QEM.
+//! - QEM: M. Garland, P. Heckbert, "Surface simplification using quadric error metrics", 1997.
+//! - Melax: S. Melax, "A simple, fast and effective polygon reduction algorithm", Game Developer,
+//!   1998 — cost = edge length × curvature term.
+//! - Progressive meshes: H. Hoppe, "Progressive meshes", SIGGRAPH 1996.
+//!
+//! Data flows in this order, one room each, and [`simplify`] below reads the same way:
+//! 1. `options` — the options checked ([`SimplifyOptions::validate`]) and the face target;
+//! 2. `classify` — preparation (faces that repeat a vertex dropped) and one scan of the fans that
+//!    classifies every vertex;
+//! 3. `kernel` — the working state: fans, quadrics, Gouraud normals, alive flags, version stamps;
+//! 4. `cost` and `placement` — the cost of an edge and where its merged vertex goes;
+//!    `queue` — the key an edge is queued under (stale entries skipped by per-vertex version
+//!    stamps, as in the paper); `guard` — the distance guard's term, when it is on;
+//! 5. `run` — the loop: pop, check (`legality`, rules below), collapse (`kernel`), re-rank;
+//! 6. the output mesh and, if asked, the progressive mesh built from the log (`crate::pm`);
+//!    `search` runs the whole pipeline once per candidate w.
+//!
+//! ## Ordering and ties
+//! For QFVP with w > 0 the cost is exactly zero where both endpoint normals agree (flat regions):
+//! those collapses all cost nothing. The queue puts every zero-cost candidate first, ordered among
+//! themselves by quadric error, so flat regions are simplified in the order plain QEM would use;
+//! positive costs follow in cost order (`crate::queue::order_key`, costs kept as `f32`). Where the
+//! quadric error itself vanishes (an exactly planar neighbourhood: zero, or too small for an `f32`)
+//! the shorter edge goes first, which keeps the triangles of planar regions well shaped: on fandisk
+//! it refuses 0.07× as many candidates as leaving them tied did, and runs in 0.4× the time.
+//! Remaining ties go to the lower first vertex id, then to the queue's layout, which the sequence
+//! of pushes, pops, refills and sweeps fixes (not push order: a heap is not stable): a run is
+//! deterministic, which the progressive mesh's `at_faces` relies on, but a change to the queue
+//! moves ties among equal keys.
+//!
+//! ## The distance guard (optional, [`SimplifyOptions::guard`])
+//! Quadric error has a blind spot: shortening a thin tip (a cow's horn, a finger) moves its apex
+//! along planes nearly parallel to the move, so the collapse looks cheap while the Hausdorff
+//! distance jumps. The guard charges each candidate `guard · A · d²` on top of its quadric error
+//! (then the QFVP normal factor as usual), with A the surface area behind the merged quadric and d
+//! a measured distance, both ways: from the input vertices merged into the endpoints (up to
+//! [`WITNESSES`] each, the farthest) to the fan the collapse would create, and from the new
+//! position and the new faces' centroids to the input surface ([`DistanceGuard`]). The term only
+//! adds, so entries are queued without it and measured when they reach the top: one that is no
+//! longer the cheapest goes back with its measured key (a lazy queue: the greedy order of the
+//! guarded costs, measuring ~3 candidates per collapse instead of ~12). Its price in time is in
+//! docs/benchmarks.md and its effect on the error in docs/simplify-report.md (Table 1b).
+//!
+//! ## Legality of a collapse (a, b) → a at position p, checked in this order
+//! Rules 1 and 2 are applied when an edge is ranked (an edge they forbid is never queued); rules
+//! 3–6 when a candidate reaches the top of the queue (`legality`), each refusal counted under its
+//! rule ([`SimplifyStats::refused`]).
+//! ```text
+//!        vl                  vl
+//!       /  \                 |
+//!      /    \                |
+//!     a------b     ==>       a (at p)
+//!      \    /                |
+//!       \  /                 |
+//!        vr                  vr
+//! ```
+//! 1. neither endpoint is frozen (non-manifold or inconsistently oriented neighbourhood);
+//! 2. boundaries: an interior edge with both ends on the boundary is refused (it would pinch the
+//!    surface); a boundary vertex is never removed in favour of an interior one and does not move
+//!    off its boundary; with [`BoundaryMode::Lock`] boundary vertices never move or disappear;
+//! 3. link condition: the common neighbours of a and b are exactly vl and vr (Dey et al.), and the
+//!    merged vertex keeps at least one face (three for an interior vertex), so the surface stays a
+//!    2-manifold and no component collapses to nothing;
+//! 4. every face that survives around a or b keeps a normal within
+//!    [`SimplifyOptions::max_normal_change_degrees`] of its old one (no flips);
+//! 5. no surviving face becomes a needle or zero-area triangle ([`MIN_TRIANGLE_QUALITY`]);
+//! 6. no fold: no moved face turns back onto the unmoved face across its far edge, and no two moved
+//!    faces that share an edge turn back onto each other (normals' dot product below [`FOLD_DOT`]).
+//!    The face across is looked at only when the normal cones of the far edge's two ends
+//!    (`NormalCone`: how far the faces around a vertex stray from its normal) leave a fold
+//!    possible (one moved face in 600 to 10 000 on bunny, nefertiti and fandisk); debug builds check
+//!    every skipped one anyway.
+
+mod classify;
+mod cost;
+mod guard;
+pub(crate) mod kernel;
+mod legality;
+mod options;
+mod placement;
+mod queue;
+mod run;
+mod search;
+
+use std::time::Instant;
+
+pub(crate) use classify::VertexKind;
+pub use classify::prepare;
+pub(crate) use kernel::State;
+pub use legality::{FOLD_DOT, MIN_TRIANGLE_QUALITY};
+pub use options::{
+    BoundaryMode, Metric, NormalUpdate, Placement, Refusals, Simplified, SimplifyOptions, SimplifyStats, StopReason,
+};
+pub use run::MAX_PASSES;
+pub use search::{WSearch, simplify_search_w};
+
+use crate::error::MeshError;
+use crate::mesh::{DistanceUnits, Mesh};
+use crate::pm::ProgressiveMesh;
+
+/// Simplifies `mesh` by edge collapses until a target is met; see the module documentation.
+pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, MeshError> {
+    let started = Instant::now();
+    // 1. Options and input.
+    options.validate()?;
+    mesh.check()?;
+    let (prepared, input_vertex, dropped) = classify::prepare_in_place(mesh);
+    if prepared.triangles.is_empty() {
+        return Err(MeshError::Empty { what: "no faces" });
+    }
+    let faces_in = prepared.face_count();
+    let target = options.face_target(faces_in);
+    if options.guard > 0.0 && prepared.vertex_count() >= guard::GUARDED as usize {
+        return Err(MeshError::InvalidParameter {
+            name: "guard",
+            reason: format!("{} vertices: the distance guard handles fewer than 2³¹", prepared.vertex_count()),
+        });
+    }
+    // Every vertex of the prepared mesh is on a face: its bounds are its surface's.
+    let units = DistanceUnits::new(&prepared.bounds().expect("has faces"));
+    // 2–3. Classification and working state. Melax's cost reads face normals through the triangle
+    // array; the quadric costs never do, so the array is rebuilt once at the end instead.
+    let (mut state, edges) = State::with_tracking(&prepared, options, options.metric == Metric::Melax);
+    // 4. Every edge queued.
+    let heap = run::initial_queue(&state, edges, faces_in);
+    // 5. The loop.
+    let run = run::run(&mut state, heap, &units, faces_in, target)?;
+    // 6. Outputs. The guard's tree and tables are done with: their memory goes back first.
+    state.guard = None;
+    state.rebuild_triangles(&prepared, &run.log);
+    let simplified = state.output_mesh();
+    let progressive = options.record_progressive.then(|| {
+        ProgressiveMesh::from_log(
+            &prepared,
+            &input_vertex,
+            |v| state.vertices[v as usize].position,
+            &state.triangles,
+            &state.face_alive,
+            &run.log,
+        )
+    });
+    let frozen_vertices = state.vertices.iter().filter(|v| v.kind == VertexKind::Frozen).count();
+    let stats = SimplifyStats {
+        faces_in,
+        faces_out: simplified.face_count(),
+        vertices_in: prepared.vertex_count(),
+        vertices_out: simplified.vertex_count(),
+        target_faces: target,
+        collapses: run.log.len(),
+        stop_reason: run.stop_reason,
+        max_collapse_error: run.max_collapse_error,
+        rejected: run.refused.total(),
+        refused: run.refused,
+        frozen_vertices,
+        dropped_degenerate_faces: dropped,
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    Ok(Simplified { mesh: simplified, progressive, stats })
+}

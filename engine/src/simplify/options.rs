@@ -1,0 +1,327 @@
+//! What a run is asked for and what it reports: the option types with their defaults, their one
+//! check ([`SimplifyOptions::validate`], errors named after the fields), the one face target
+//! ([`SimplifyOptions::face_target`]), stop reasons and figures.
+
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use serde::Serialize;
+
+use crate::error::MeshError;
+use crate::mesh::Mesh;
+use crate::pm::ProgressiveMesh;
+
+/// The collapse cost.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "metric", rename_all = "lowercase")]
+pub enum Metric {
+    /// `vᵀQv · (1 − cos θ)^w`, w ∈ [0, 2].
+    Qfvp {
+        /// Exponent of the normal-angle term.
+        w: f64,
+    },
+    /// Plain quadric error `vᵀQv` (QFVP with w = 0).
+    Qem,
+    /// Melax: edge length × curvature; the removed vertex moves onto the survivor.
+    Melax,
+}
+
+impl Metric {
+    /// Short name as the CLI spells it.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Metric::Qfvp { .. } => "qfvp",
+            Metric::Qem => "qem",
+            Metric::Melax => "melax",
+        }
+    }
+
+    /// The QFVP exponent (0 for QEM, none for Melax).
+    pub fn w(&self) -> Option<f64> {
+        match self {
+            Metric::Qfvp { w } => Some(*w),
+            Metric::Qem => Some(0.0),
+            Metric::Melax => None,
+        }
+    }
+}
+
+/// Where the merged vertex goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Placement {
+    /// The paper's rule: the best of the two endpoints and their midpoint.
+    Paper,
+    /// The quadric minimiser when well conditioned and near the edge, else the paper's rule.
+    Optimal,
+    /// The better endpoint (half-edge collapse): vertices never move, so each vertex split
+    /// carries one position and the `.pm` file is smallest.
+    Endpoint,
+}
+
+/// How the merged vertex's normal is found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum NormalUpdate {
+    /// The paper's linear estimate `(cs·ns + ct·nt) / (cs + ct)`, cs, ct the endpoint face counts.
+    Linear,
+    /// Mean of the face normals of the merged vertex's new fan.
+    Recompute,
+}
+
+/// How open boundaries are kept.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BoundaryMode {
+    /// Boundary vertices may collapse along their boundary; planes perpendicular to the boundary
+    /// faces are added to their quadrics so the border keeps its shape.
+    Preserve,
+    /// Boundary vertices never move and are never removed.
+    Lock,
+}
+
+/// Options of [`simplify`]. Targets combine: simplification stops at whichever is met first.
+#[derive(Debug, Clone)]
+pub struct SimplifyOptions {
+    /// Stop when at most this many faces remain.
+    pub target_faces: Option<usize>,
+    /// Stop when this fraction of the faces has been removed (0.9 keeps 10%), as in the paper.
+    pub target_ratio: Option<f64>,
+    /// Stop before a collapse whose error estimate exceeds this, in paper units.
+    pub max_error: Option<f64>,
+    /// Collapse cost.
+    pub metric: Metric,
+    /// Placement of the merged vertex (Melax always uses the surviving endpoint).
+    pub placement: Placement,
+    /// Normal of the merged vertex.
+    pub normals: NormalUpdate,
+    /// Boundary handling.
+    pub boundary: BoundaryMode,
+    /// Largest change of a face normal a collapse may cause, in degrees (0, 180].
+    pub max_normal_change_degrees: f64,
+    /// Build the progressive mesh (base mesh + vertex splits).
+    pub record_progressive: bool,
+    /// Weight of the distance guard, ≥ 0 (0, the default, turns it off; 1 is the documented
+    /// setting). With it, each QEM/QFVP collapse cost also pays `guard · A · d²` before the normal
+    /// factor: A the surface area behind the merged quadric, d a measured distance between the
+    /// collapse's new fan and the input surface, both ways (the module doc's "distance guard"). It
+    /// covers quadric error's blind spot, a thin tip shortened along its own faces, at a price in
+    /// time and memory given in docs/benchmarks.md; not with Melax.
+    pub guard: f64,
+    /// Set to `true` by another thread to stop the work; the call then returns
+    /// [`MeshError::Cancelled`].
+    pub cancel: Option<Arc<AtomicBool>>,
+}
+
+impl Default for SimplifyOptions {
+    fn default() -> Self {
+        SimplifyOptions {
+            target_faces: None,
+            target_ratio: Some(DEFAULT_TARGET_RATIO),
+            max_error: None,
+            // w = 0 gave the lowest Hausdorff on 16 of 22 (mesh, reduction) cases of the shared
+            // meshes (docs/simplify-report.md); a per-mesh w comes from the predictor.
+            metric: Metric::Qfvp { w: 0.0 },
+            placement: Placement::Optimal,
+            normals: NormalUpdate::Linear,
+            boundary: BoundaryMode::Preserve,
+            max_normal_change_degrees: DEFAULT_MAX_NORMAL_CHANGE_DEGREES,
+            record_progressive: false,
+            guard: 0.0,
+            cancel: None,
+        }
+    }
+}
+
+/// Why the collapse loop ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// The face target (count or ratio) was reached.
+    TargetReached,
+    /// The next collapse would have exceeded `max_error`.
+    MaxErrorReached,
+    /// No legal collapse remained (every candidate would break manifoldness, flip a face, touch a
+    /// locked vertex or a boundary rule) before the target.
+    NoLegalCollapse,
+}
+
+impl StopReason {
+    /// The reason as reports and the gRPC contract spell it.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            StopReason::TargetReached => "target_reached",
+            StopReason::MaxErrorReached => "max_error_reached",
+            StopReason::NoLegalCollapse => "no_legal_collapse",
+        }
+    }
+}
+
+/// Figures of one run.
+#[derive(Debug, Clone, Serialize)]
+pub struct SimplifyStats {
+    /// Faces of the input (after dropping faces that repeat a vertex).
+    pub faces_in: usize,
+    /// Faces of the output.
+    pub faces_out: usize,
+    /// Referenced vertices of the input.
+    pub vertices_in: usize,
+    /// Vertices of the output.
+    pub vertices_out: usize,
+    /// The face target that applied.
+    pub target_faces: usize,
+    /// Collapses performed.
+    pub collapses: usize,
+    /// Why it stopped.
+    pub stop_reason: StopReason,
+    /// Largest collapse error estimate, paper units.
+    pub max_collapse_error: f64,
+    /// Candidates refused by the legality checks (the sum of `refused`).
+    pub rejected: usize,
+    /// The same refusals, by rule.
+    pub refused: Refusals,
+    /// Vertices no collapse may touch: non-manifold or inconsistently oriented neighbourhoods, and
+    /// boundary vertices under [`BoundaryMode::Lock`].
+    pub frozen_vertices: usize,
+    /// Faces dropped before simplifying because they repeat a vertex index.
+    pub dropped_degenerate_faces: usize,
+    /// Wall time in seconds.
+    pub seconds: f64,
+}
+
+/// Result of [`simplify`].
+#[derive(Debug, Clone)]
+pub struct Simplified {
+    /// The simplified mesh: surviving vertices in input order, surviving faces in input order.
+    pub mesh: Mesh,
+    /// The progressive mesh, when asked for.
+    pub progressive: Option<ProgressiveMesh>,
+    /// Figures of the run.
+    pub stats: SimplifyStats,
+}
+
+/// The target ratio when neither target is given: half the faces removed.
+pub const DEFAULT_TARGET_RATIO: f64 = 0.5;
+
+/// The largest face-normal change a collapse may cause by default, degrees.
+pub const DEFAULT_MAX_NORMAL_CHANGE_DEGREES: f64 = 90.0;
+
+impl SimplifyOptions {
+    /// Checks every option on its own and against the others; errors name the field.
+    pub fn validate(&self) -> Result<(), MeshError> {
+        if let Some(r) = self.target_ratio
+            && !(0.0..1.0).contains(&r)
+        {
+            return Err(MeshError::InvalidParameter {
+                name: "target_ratio",
+                reason: format!("{r} is outside [0, 1): it is the fraction of faces removed"),
+            });
+        }
+        if let Metric::Qfvp { w } = self.metric
+            && !(0.0..=2.0).contains(&w)
+        {
+            return Err(MeshError::InvalidParameter { name: "w", reason: format!("{w} is outside [0, 2]") });
+        }
+        if let Some(e) = self.max_error
+            && (e.is_nan() || e < 0.0)
+        {
+            return Err(MeshError::InvalidParameter { name: "max_error", reason: format!("{e} must be ≥ 0") });
+        }
+        let guard = self.guard;
+        if !(guard.is_finite() && guard >= 0.0) {
+            return Err(MeshError::InvalidParameter {
+                name: "guard",
+                reason: format!("{guard} must be a finite number ≥ 0"),
+            });
+        }
+        if guard > 0.0 && self.metric == Metric::Melax {
+            return Err(MeshError::InvalidParameter {
+                name: "guard",
+                reason: "the distance guard adds to the quadric costs (QFVP, QEM), not to Melax's".into(),
+            });
+        }
+        let angle = self.max_normal_change_degrees;
+        if !(angle > 0.0 && angle <= 180.0) {
+            return Err(MeshError::InvalidParameter {
+                name: "max_normal_change_degrees",
+                reason: format!("{angle} is outside (0, 180]"),
+            });
+        }
+        Ok(())
+    }
+
+    /// The face count a run on `faces` faces stops at: the larger of the two targets where both
+    /// are given (whichever is met first), 0 where neither is. The one definition: the predictor's
+    /// features, the server and the CLI all ask here.
+    pub fn face_target(&self, faces: usize) -> usize {
+        let by_ratio = self.target_ratio.map(|r| ((faces as f64) * (1.0 - r)).round() as usize);
+        match (self.target_faces, by_ratio) {
+            (Some(n), Some(m)) => n.max(m),
+            (Some(n), None) => n,
+            (None, Some(m)) => m,
+            (None, None) => 0,
+        }
+    }
+
+    /// [`SimplifyOptions::face_target`] for `mesh` as [`super::simplify`] will count its faces (those
+    /// that repeat a vertex are dropped first): what a caller that predicts or reports the target
+    /// before the run should ask.
+    pub fn face_target_for(&self, mesh: &Mesh) -> usize {
+        let usable = mesh.triangles.iter().filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]).count();
+        self.face_target(usable)
+    }
+
+    /// The fraction of `faces` that [`SimplifyOptions::face_target`] removes.
+    pub fn effective_ratio(&self, faces: usize) -> f64 {
+        if faces == 0 { 0.0 } else { 1.0 - self.face_target(faces).min(faces) as f64 / faces as f64 }
+    }
+}
+
+/// Candidates refused at the top of the queue, by legality rule (module doc, rules 3–6).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct Refusals {
+    /// Rule 3: the link condition (the endpoints share a neighbour off the edge, or the edge does
+    /// not have one or two faces).
+    pub link: usize,
+    /// Rule 3: the merged vertex would keep too few faces.
+    pub too_few_faces: usize,
+    /// Rule 4: a face normal would turn by more than the limit.
+    pub normal_change: usize,
+    /// Rule 5: a face would become a needle or have no area.
+    pub needle: usize,
+    /// Rule 6: a moved face would fold onto a neighbour.
+    pub fold: usize,
+}
+
+impl Refusals {
+    /// Counts one refusal under its rule.
+    pub(crate) fn count(&mut self, refusal: Refusal) {
+        *match refusal {
+            Refusal::Link => &mut self.link,
+            Refusal::TooFewFaces => &mut self.too_few_faces,
+            Refusal::NormalChange => &mut self.normal_change,
+            Refusal::Needle => &mut self.needle,
+            Refusal::Fold => &mut self.fold,
+        } += 1;
+    }
+
+    /// All refusals.
+    pub fn total(&self) -> usize {
+        self.link + self.too_few_faces + self.normal_change + self.needle + self.fold
+    }
+}
+
+/// Why a candidate collapse was refused (module doc, rules 3–6).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Refusal {
+    /// Rule 3: link condition.
+    Link,
+    /// Rule 3: too few faces left at the merged vertex.
+    TooFewFaces,
+    /// Rule 4: a normal turns too far.
+    NormalChange,
+    /// Rule 5: a needle or zero-area face.
+    Needle,
+    /// Rule 6: a fold.
+    Fold,
+}

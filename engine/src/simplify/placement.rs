@@ -1,0 +1,120 @@
+//! Where the merged vertex goes and which endpoint survives: the quadric minimiser, the paper's
+//! rule (endpoints and midpoint), the endpoint-only rule, and the boundary rules, each ranked by
+//! the metric's cost.
+
+use glam::DVec3;
+
+use super::classify::VertexKind;
+use super::kernel::{State, to_f64};
+use super::options::{BoundaryMode, Metric, Placement};
+
+/// Which endpoint of an edge survives its collapse.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Keep {
+    A,
+    B,
+    /// Either may: the one with more faces ([`State::evaluate`]).
+    Larger,
+}
+
+/// A collapse as [`State::choose`] ranks it, before the survivor is fixed.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Choice {
+    pub(super) cost: f64,
+    pub(super) error: f64,
+    pub(super) keep: Keep,
+    pub(super) position: DVec3,
+}
+
+impl State<'_> {
+    /// The metric's preferred collapse of edge {a, b} as cost, error and position, the survivor
+    /// left open where either endpoint may move: the queue key needs no more, so queueing an edge
+    /// never reads the fans.
+    #[inline]
+    pub(super) fn choose(&self, a: u32, b: u32) -> Option<Choice> {
+        let (va, vb) = (&self.vertices[a as usize], &self.vertices[b as usize]);
+        let (ka, kb) = (va.kind, vb.kind);
+        if ka == VertexKind::Frozen || kb == VertexKind::Frozen {
+            return None;
+        }
+        let lock = self.options.boundary == BoundaryMode::Lock;
+        // Which endpoints may survive, and whether the survivor may move.
+        let (may_keep_a, may_keep_b, may_move) = match (ka, kb) {
+            (VertexKind::Boundary, VertexKind::Boundary) => {
+                if lock || self.edge_corners(a, b).1 != 1 {
+                    return None; // interior edge joining two boundary points, or locked border
+                }
+                (true, true, true)
+            }
+            (VertexKind::Boundary, _) => (true, false, false),
+            (_, VertexKind::Boundary) => (false, true, false),
+            _ => (true, true, true),
+        };
+        let (pa, pb) = (to_f64(va.position), to_f64(vb.position));
+        let mut best: Option<Choice> = None;
+        // Keeps the choice with the lower (cost, error); the first one considered wins a tie.
+        let mut consider = |keep: Keep, position: DVec3, cost: f64, error: f64| {
+            if best.as_ref().is_none_or(|c| (cost, error) < (c.cost, c.error)) {
+                best = Some(Choice { cost, error, keep, position });
+            }
+        };
+        let q = va.quadric + vb.quadric;
+        match self.options.metric {
+            Metric::Melax => {
+                if may_keep_b {
+                    consider(Keep::B, pb, self.melax_cost(a, b), q.error(pb));
+                }
+                if may_keep_a {
+                    consider(Keep::A, pa, self.melax_cost(b, a), q.error(pa));
+                }
+            }
+            Metric::Qem | Metric::Qfvp { .. } => {
+                // The normal term depends on the edge only, not on where the merged vertex goes,
+                // so every placement of this edge is ranked by its quadric error alone.
+                let factor = self.normal_factor(va, vb);
+                let mover = match (may_keep_a, may_keep_b) {
+                    (true, false) => Keep::A,
+                    (false, true) => Keep::B,
+                    _ => Keep::Larger,
+                };
+                let on_boundary = ka == VertexKind::Boundary && kb == VertexKind::Boundary;
+                let optimal = may_move && self.options.placement == Placement::Optimal;
+                if optimal
+                    && !on_boundary
+                    && let Some(p) = q.minimizer()
+                    && (p - (pa + pb) * 0.5).length_squared() <= (pa - pb).length_squared()
+                {
+                    // The minimiser of vᵀQv, when well conditioned and within one edge length of
+                    // the midpoint (a nearly singular system can run far off), has the lowest
+                    // error of all placements: nothing else needs evaluating.
+                    let error = q.error(p);
+                    return Some(Choice { cost: error * factor, error, keep: mover, position: p });
+                }
+                let (e_a, e_b) = (q.error(pa), q.error(pb));
+                if may_keep_a {
+                    consider(Keep::A, pa, e_a * factor, e_a);
+                }
+                if may_keep_b {
+                    consider(Keep::B, pb, e_b * factor, e_b);
+                }
+                if may_move && self.options.placement != Placement::Endpoint {
+                    let mid = (pa + pb) * 0.5;
+                    let e_mid = q.error(mid);
+                    consider(mover, mid, e_mid * factor, e_mid);
+                    if optimal && on_boundary {
+                        // A boundary edge's vertex stays on the edge: the best point of the segment
+                        // (the error along it is a parabola through its values at 0, ½ and 1).
+                        let curvature = e_a - 2.0 * e_mid + e_b;
+                        if curvature > 0.0 {
+                            let t = (0.25 * (3.0 * e_a - 4.0 * e_mid + e_b) / curvature).clamp(0.0, 1.0);
+                            let p = pa + (pb - pa) * t;
+                            let error = q.error(p);
+                            consider(mover, p, error * factor, error);
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+}

@@ -1,0 +1,103 @@
+//! Queue keys: how an edge enters the priority queue ([`State::entry`], two at a time in the usual
+//! case), and how a popped entry is known to be stale (version stamps). The queue itself is
+//! `crate::queue`.
+
+use crate::quadric::QuadricPair;
+use crate::queue::{QueueEntry, TieredQueue, order_key};
+
+use super::classify::VertexKind;
+use super::guard::GUARDED;
+use super::kernel::{NONE, State, to_f64};
+use super::options::{Metric, Placement};
+
+impl State<'_> {
+    pub(super) fn push_edges_of(&mut self, v: u32, heap: &mut TieredQueue, neighbours: &mut Vec<u32>) {
+        // Unique neighbours by mark stamps (no sort: the heap's total order makes push order moot).
+        // Written unconditionally and kept by advancing the count: whether a corner's vertex was
+        // seen already is as good as random (each is seen twice around an interior vertex).
+        let stamp = self.next_stamp();
+        let fan = &self.fans[v as usize];
+        neighbours.clear();
+        neighbours.resize(2 * fan.len(), NONE);
+        let mut count = 0;
+        for c in fan {
+            for u in [c.next, c.prev] {
+                let mark = &mut self.mark[u as usize];
+                neighbours[count] = u;
+                count += (*mark != stamp) as usize;
+                *mark = stamp;
+            }
+        }
+        neighbours.truncate(count);
+        let mut pairs = neighbours.chunks_exact(2);
+        for pair in &mut pairs {
+            for entry in self.entry_pair(v, [pair[0], pair[1]]).into_iter().flatten() {
+                heap.push(entry);
+            }
+        }
+        for &u in pairs.remainder() {
+            self.push_edge(v, u, heap);
+        }
+    }
+
+    /// [`State::entry`] of edges {v, us[0]} and {v, us[1]}: in the usual case (interior ends, a
+    /// quadric cost, optimal placement) both quadric sums are minimised side by side
+    /// ([`QuadricPair`]); an edge outside it, or whose minimiser is refused, is ranked alone. The
+    /// same keys to the bit: the pair performs the scalar operations lane by lane, and the sums,
+    /// the midpoint, the squared edge length and the normals' dot product do not depend on which
+    /// end comes first.
+    #[inline]
+    pub(super) fn entry_pair(&self, v: u32, us: [u32; 2]) -> [Option<QueueEntry>; 2] {
+        let vv = &self.vertices[v as usize];
+        let (v0, v1) = (&self.vertices[us[0] as usize], &self.vertices[us[1] as usize]);
+        let quadric_cost = self.options.metric != Metric::Melax && self.options.placement == Placement::Optimal;
+        let interior = quadric_cost & (vv.kind == VertexKind::Interior);
+        let usual = [interior & (v0.kind == VertexKind::Interior), interior & (v1.kind == VertexKind::Interior)];
+        if !(usual[0] || usual[1]) {
+            return [self.entry(v, us[0]), self.entry(v, us[1])];
+        }
+        let pair = QuadricPair::sums(&vv.quadric, [&v0.quadric, &v1.quadric]);
+        let (points, solved) = pair.minimizers();
+        let errors = pair.errors(points);
+        let pv = to_f64(vv.position);
+        let mut out = [None; 2];
+        for (i, vu) in [v0, v1].into_iter().enumerate() {
+            let pu = to_f64(vu.position);
+            let length2 = (pv - pu).length_squared();
+            let near = (points[i] - (pv + pu) * 0.5).length_squared() <= length2;
+            out[i] = if usual[i] && solved[i] && near {
+                let (a, b) = (v.min(us[i]), v.max(us[i]));
+                let key = order_key(errors[i] * self.normal_factor(vv, vu), errors[i], length2);
+                Some(QueueEntry::new(key, a, b, self.stamp(a, b)))
+            } else {
+                self.entry(v, us[i])
+            };
+        }
+        out
+    }
+
+    pub(super) fn push_edge(&self, a: u32, b: u32, heap: &mut TieredQueue) {
+        if let Some(entry) = self.entry(a, b) {
+            heap.push(entry);
+        }
+    }
+
+    pub(super) fn entry(&self, a: u32, b: u32) -> Option<QueueEntry> {
+        let (a, b) = (a.min(b), a.max(b));
+        let choice = self.choose(a, b)?;
+        let length2 = (self.point(a) - self.point(b)).length_squared();
+        Some(QueueEntry::new(order_key(choice.cost, choice.error, length2), a, b, self.stamp(a, b)))
+    }
+
+    /// Whether neither endpoint of `entry` changed since it was queued.
+    #[inline]
+    pub(super) fn is_current(&self, entry: &QueueEntry) -> bool {
+        self.stamp(entry.a(), entry.b & !GUARDED) == entry.stamp
+    }
+
+    /// Sum of the version stamps of `a` and `b` (see [`QueueEntry::stamp`]).
+    #[inline]
+    pub(super) fn stamp(&self, a: u32, b: u32) -> u32 {
+        self.version[a as usize].wrapping_add(self.version[b as usize])
+    }
+}

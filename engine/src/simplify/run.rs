@@ -1,0 +1,155 @@
+//! The collapse loop: pop the cheapest current candidate, re-rank it with the guard's term when
+//! the guard is on, check it, collapse it, re-rank the edges around the survivor. Each way out of
+//! the loop is one [`StopReason`] (or cancellation), commented where it is taken.
+
+use std::sync::atomic::Ordering as AtomicOrdering;
+
+use crate::error::MeshError;
+use crate::mesh::DistanceUnits;
+use crate::pm::CollapseRecord;
+use crate::queue::{QueueEntry, TieredQueue};
+
+use super::guard::GUARDED;
+use super::kernel::{NONE, State, to_f64};
+use super::options::{Refusals, StopReason};
+
+/// Times the queue is rebuilt from all remaining edges when it runs dry before the target: a
+/// candidate refused earlier may have become legal after its neighbourhood changed.
+pub const MAX_PASSES: usize = 4;
+
+/// How often (in queue pops) the cancel flag is read.
+const CANCEL_CHECK_INTERVAL: usize = 256;
+
+/// What the loop did.
+pub(super) struct Run {
+    pub(super) log: Vec<CollapseRecord>,
+    pub(super) stop_reason: StopReason,
+    pub(super) refused: Refusals,
+    /// Largest collapse error estimate, paper units.
+    pub(super) max_collapse_error: f64,
+}
+
+/// The queue of every edge of the fresh state, heapified once (linear) rather than pushed edge by
+/// edge.
+pub(super) fn initial_queue(state: &State, edges: Vec<[u32; 2]>, faces_in: usize) -> TieredQueue {
+    // The edges come sorted by their lower end, so the higher end's block is the one not in cache:
+    // those of the next chunk are asked for while this one is ranked.
+    const CHUNK: usize = 16;
+    // Room for the queue's growth to its sweep bound (2 entries per face, in `run`) from the
+    // start: growing it later copies every entry into freshly faulted pages.
+    let mut entries = Vec::with_capacity(edges.len().max(2 * faces_in + 16));
+    for (i, chunk) in edges.chunks(CHUNK).enumerate() {
+        let ahead = edges.get((i + 1) * CHUNK..((i + 2) * CHUNK).min(edges.len())).unwrap_or_default();
+        ahead.iter().for_each(|e| state.vertices[e[1] as usize].prefetch());
+        entries.extend(chunk.iter().filter_map(|&[a, b]| state.entry(a, b)));
+    }
+    TieredQueue::new(entries)
+}
+
+/// Collapses until `target` faces remain (of `faces_in`), the next collapse would exceed the
+/// options' `max_error`, or no legal collapse is left.
+pub(super) fn run(
+    state: &mut State,
+    mut heap: TieredQueue,
+    units: &DistanceUnits,
+    faces_in: usize,
+    target: usize,
+) -> Result<Run, MeshError> {
+    let options = state.options;
+    let vertex_count = state.vertices.len();
+    let mut faces_alive = faces_in;
+    // A collapse removes two faces (one on a boundary): sized for the usual case up front.
+    let mut log: Vec<CollapseRecord> = Vec::with_capacity((faces_in - target.min(faces_in)) / 2 + 16);
+    let mut neighbours = Vec::new();
+    let mut refused = Refusals::default();
+    let mut pops = 0usize;
+    let mut passes = 1;
+    let mut collapses_this_pass = 0;
+    let mut max_collapse_error: f64 = 0.0;
+    let stop_reason = loop {
+        // Stop: the face target is met.
+        if faces_alive <= target {
+            break StopReason::TargetReached;
+        }
+        pops += 1;
+        // Stop: cancelled by the caller (checked every few hundred pops).
+        if pops.is_multiple_of(CANCEL_CHECK_INTERVAL)
+            && let Some(flag) = &options.cancel
+            && flag.load(AtomicOrdering::Relaxed)
+        {
+            return Err(MeshError::Cancelled);
+        }
+        let current = |e: &QueueEntry| state.is_current(e);
+        let Some(entry) = heap.pop(current) else {
+            // Stop: the queue ran dry before the target, and either the passes are used up or the
+            // last pass collapsed nothing (a new one would find the same refusals).
+            if passes >= MAX_PASSES || collapses_this_pass == 0 {
+                break StopReason::NoLegalCollapse;
+            }
+            // Otherwise refused candidates may have become legal since: queue every edge again.
+            passes += 1;
+            collapses_this_pass = 0;
+            for v in 0..vertex_count as u32 {
+                if state.vertex_alive[v as usize] {
+                    neighbours.clear();
+                    state.push_edges_of(v, &mut heap, &mut neighbours);
+                }
+            }
+            continue;
+        };
+        let (a, b) = (entry.a(), entry.b & !GUARDED);
+        // The next top is most often the next candidate: its data is on the way while this one is
+        // checked and collapsed.
+        if let Some(next) = heap.peek() {
+            state.prefetch_edge(next.a(), next.b & !GUARDED);
+        }
+        if !state.is_current(&entry) {
+            continue; // stale: an endpoint changed (or was removed) since this entry was queued
+        }
+        if let Some(guard) = &state.guard
+            && entry.b & GUARDED == 0
+        {
+            // Queued without the guard's term, which only adds: rank it with the term now, and
+            // put it back unless it still comes first (the result is the greedy order of the
+            // guarded costs, at one measurement per candidate that reaches the top).
+            let Some(key) = state.guarded_key(guard, a, b) else { continue };
+            let guarded = QueueEntry::new(key, a, b | GUARDED, entry.stamp);
+            if heap.top(current).is_some_and(|top| top.rank() < guarded.rank()) {
+                heap.push(guarded);
+                continue;
+            }
+        }
+        let Some(candidate) = state.evaluate(a, b) else { continue };
+        let merged = state.vertices[a as usize].quadric + state.vertices[b as usize].quadric;
+        let error_paper = units.to_paper(merged.distance(to_f64(candidate.position)));
+        // Stop: the cheapest collapse left would exceed the error limit (costs are not errors, so
+        // this is the first popped candidate over it, not a proof that none is under it).
+        if let Some(limit) = options.max_error
+            && error_paper > limit
+        {
+            break StopReason::MaxErrorReached;
+        }
+        let legal = match state.is_legal(&candidate) {
+            Ok(legal) => legal,
+            Err(refusal) => {
+                refused.count(refusal);
+                continue;
+            }
+        };
+        let mut record = state.collapse(legal);
+        max_collapse_error = max_collapse_error.max(error_paper);
+        record.error = max_collapse_error as f32;
+        faces_alive -= (record.left_face != NONE) as usize + (record.right_face != NONE) as usize;
+        log.push(record);
+        collapses_this_pass += 1;
+        state.push_edges_of(candidate.survivor, &mut heap, &mut neighbours);
+        // The queue's refills drop the stale entries they pass over; where its heap takes most
+        // pushes (refills then come seldom: fandisk's planar regions) they pile up instead. A mesh
+        // has about 1.5 edges per face, so once the queue holds more than 2 entries per face a
+        // quarter or more are stale: one linear sweep drops them.
+        if heap.len() > 2 * faces_alive {
+            heap.sweep(|e| state.is_current(e));
+        }
+    };
+    Ok(Run { log, stop_reason, refused, max_collapse_error })
+}

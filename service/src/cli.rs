@@ -1,0 +1,557 @@
+//! The command line: every subcommand's flags, and how they become jobs. No work is done here.
+//!
+//! The simplify, refine and predict flags are one set of structs, used by the local commands,
+//! by `meshlod client` and by batch manifests; they map onto the contract's options in one place
+//! ([`SimplifyArgs::job`]), and the contract's options onto the engine's in one other
+//! (`meshlod_service::convert`), where the engine's defaults fill what is not given.
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use meshlod_engine::hausdorff::HausdorffOptions;
+use meshlod_service::convert::MeshLimits;
+use meshlod_service::executor::{PredictJob, RefineJob, SimplifyJob};
+use meshlod_service::proto;
+
+use crate::samples::SamplesArgs;
+
+/// meshlod: progressive meshes and levels of detail for heavy triangle meshes, from the command
+/// line, as a gRPC server, or as its client.
+#[derive(Debug, Parser)]
+#[command(name = "meshlod", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Every subcommand.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Print a validation report: counts, bounding box, degenerate/duplicate faces, manifoldness.
+    Info {
+        /// Mesh file (.obj or .ply).
+        file: PathBuf,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Convert between OBJ and PLY (format from the output extension).
+    Convert {
+        /// Input mesh.
+        input: PathBuf,
+        /// Output mesh (.obj or binary .ply).
+        output: PathBuf,
+        /// Weld coincident vertices, drop degenerate/duplicate faces and unreferenced vertices.
+        #[arg(long)]
+        clean: bool,
+    },
+    /// Symmetric Hausdorff distance between two meshes, with certified lower and upper bounds
+    /// (units relative to A).
+    Hausdorff {
+        /// Reference mesh A (its bounding box defines the units).
+        a: PathBuf,
+        /// Mesh B.
+        b: PathBuf,
+        /// Relative gap allowed between the bounds: stop when upper ≤ lower · (1 + tolerance).
+        #[arg(long, default_value_t = HausdorffOptions::DEFAULT_TOLERANCE)]
+        tolerance: f64,
+        /// Face samples per direction for the area-weighted mean and RMS (default: half the
+        /// larger vertex count, at least 10000).
+        #[arg(long)]
+        samples: Option<usize>,
+        /// Seed of the face sampler.
+        #[arg(long, default_value_t = HausdorffOptions::default().seed)]
+        seed: u64,
+        /// Only the one-sided distance from A's surface to B's, its bounds met within the tolerance
+        /// (the symmetric search proves the smaller direction only below the larger one).
+        #[arg(long)]
+        directed: bool,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Write a procedurally generated mesh (for trying meshlod without data).
+    Generate {
+        /// Which shape.
+        #[arg(value_enum)]
+        shape: Shape,
+        /// Output mesh (.obj or .ply).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Resolution: subdivision level for the sphere (at most 9; default 6: 81 920 faces), grid
+        /// steps for the others (default 64: 8 192 to 49 152 faces).
+        #[arg(long)]
+        resolution: Option<u32>,
+    },
+    /// Simplify by edge collapse (QFVP, QEM or Melax), optionally writing a progressive mesh.
+    Simplify(SimplifyArgs),
+    /// Energy-operator LOD: collapse low-energy faces and/or subdivide high-energy ones.
+    Refine(RefineArgs),
+    /// Extract one level of detail from a progressive mesh (.pm).
+    Lod {
+        /// Progressive mesh written by `meshlod simplify --pm`.
+        input: PathBuf,
+        /// Output mesh (.obj or .ply).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// The finest level with at most this many faces.
+        #[arg(long, conflicts_with_all = ["vertices", "max_error"])]
+        faces: Option<usize>,
+        /// The level with this many vertices.
+        #[arg(long, conflicts_with = "max_error")]
+        vertices: Option<usize>,
+        /// The coarsest level whose recorded collapse error is at most this (paper units).
+        #[arg(long)]
+        max_error: Option<f32>,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Predict w and ETC for a mesh and a target with the shipped (or $MESHLOD_MODEL_DIR) model.
+    Predict(PredictArgs),
+    /// Run the gRPC server (meshlod.v1.MeshLod, health, reflection, metrics).
+    Serve(ServeArgs),
+    /// Call a meshlod server: the same operations, flags and reports as the local commands.
+    Client(ClientArgs),
+    /// Ask a server's health service (grpc.health.v1) whether it is serving; exit 0 if so.
+    Health(HealthArgs),
+    /// Run many jobs from a manifest, locally or against a server (see `meshlod batch --help`).
+    Batch(BatchArgs),
+    /// Generate training samples for the predictor (features, errors of every w, exact ETCs).
+    Samples(SamplesArgs),
+    /// Run the main job on a built-in mesh: generate, validate, simplify, measure. Needs no files.
+    Demo {
+        /// Directory to write the demo meshes into (default: a temporary directory).
+        #[arg(long)]
+        out_dir: Option<PathBuf>,
+    },
+}
+
+/// A procedural shape.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum Shape {
+    Sphere,
+    Torus,
+    Box,
+    Terrain,
+    Blob,
+}
+
+/// Collapse cost.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum MetricArg {
+    Qfvp,
+    Qem,
+    Melax,
+}
+
+/// Placement of the merged vertex.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum PlacementArg {
+    Paper,
+    Optimal,
+    Endpoint,
+}
+
+/// Normal of the merged vertex.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum NormalsArg {
+    Linear,
+    Recompute,
+}
+
+/// Open boundaries.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum BoundaryArg {
+    Preserve,
+    Lock,
+}
+
+/// Refine mode.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum ModeArg {
+    Simplify,
+    Subdivide,
+    Both,
+}
+
+/// `--w`: a number, `auto` (the predictor's choice) or `search` (the best of every class, measured).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum WArg {
+    Value(f64),
+    Auto,
+    Search,
+}
+
+impl std::str::FromStr for WArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if s.eq_ignore_ascii_case("search") {
+            return Ok(WArg::Search);
+        }
+        match s.parse::<Auto>() {
+            Ok(Auto::Auto) => Ok(WArg::Auto),
+            Ok(Auto::Value(w)) => Ok(WArg::Value(w)),
+            Err(_) => Err(format!("'{s}' is neither a number, 'auto' nor 'search'")),
+        }
+    }
+}
+
+/// A number, or `auto` for the predictor's choice.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Auto {
+    Auto,
+    Value(f64),
+}
+
+impl std::str::FromStr for Auto {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if s.eq_ignore_ascii_case("auto") {
+            return Ok(Auto::Auto);
+        }
+        s.parse::<f64>().map(Auto::Value).map_err(|_| format!("'{s}' is neither a number nor 'auto'"))
+    }
+}
+
+/// `meshlod simplify` flags (also `client simplify` and batch `simplify` jobs).
+#[derive(Debug, Clone, Args)]
+pub struct SimplifyArgs {
+    /// Input mesh (.obj or .ply).
+    pub input: PathBuf,
+    /// Output mesh (.obj or .ply).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Keep at most this many faces.
+    #[arg(long)]
+    pub faces: Option<u32>,
+    /// Fraction of the faces to remove, as in the paper: 0.9 keeps 10% (default 0.5 when --faces
+    /// is not given either; with both, whichever is met first).
+    #[arg(long)]
+    pub ratio: Option<f64>,
+    /// Stop before a collapse whose error estimate exceeds this (paper units).
+    #[arg(long)]
+    pub max_error: Option<f64>,
+    /// Collapse cost.
+    #[arg(long, value_enum, default_value_t = MetricArg::Qfvp)]
+    pub metric: MetricArg,
+    /// QFVP exponent w in [0, 2] (0 is plain QEM; the lowest error on most shared meshes, see
+    /// docs/simplify-report.md); `auto` for the predictor's choice; `search` to simplify with each
+    /// of 0, 0.5, 1, 1.5, 2 and keep the result with the lowest Hausdorff distance (five runs).
+    #[arg(long, default_value = "0")]
+    pub w: WArg,
+    /// Placement of the merged vertex.
+    #[arg(long, value_enum, default_value_t = PlacementArg::Optimal)]
+    pub placement: PlacementArg,
+    /// Normal of the merged vertex: the paper's linear estimate or a recompute over its fan.
+    #[arg(long, value_enum, default_value_t = NormalsArg::Linear)]
+    pub normals: NormalsArg,
+    /// Open boundaries: preserve (slide along the border) or lock (never move).
+    #[arg(long, value_enum, default_value_t = BoundaryArg::Preserve)]
+    pub boundary: BoundaryArg,
+    /// Largest change of a face normal one collapse may cause, in degrees (default 90).
+    #[arg(long)]
+    pub max_normal_change: Option<f64>,
+    /// Distance guard: each collapse also pays for the distance it opens between the result and
+    /// the input, measured both ways. Lower Hausdorff distance on most meshes (a thin tip is no
+    /// longer shortened for free) at several times the cost (docs/simplify-report.md, Table 1b).
+    /// `--guard` alone is weight 1; 0 is off.
+    #[arg(long, value_name = "WEIGHT", num_args = 0..=1, default_missing_value = "1")]
+    pub guard: Option<f64>,
+    /// Also write the progressive mesh (base + vertex splits) to this .pm file.
+    #[arg(long)]
+    pub pm: Option<PathBuf>,
+    /// Measure the Hausdorff distance between input and output (certified bounds).
+    #[arg(long)]
+    pub hausdorff: bool,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl SimplifyArgs {
+    /// The job these flags ask for, its options as the contract has them.
+    pub fn job(&self) -> SimplifyJob {
+        let options = proto::SimplifyOptions {
+            target_faces: self.faces,
+            target_ratio: self.ratio,
+            max_error: self.max_error,
+            metric: match self.metric {
+                MetricArg::Qfvp => proto::Metric::Qfvp,
+                MetricArg::Qem => proto::Metric::Qem,
+                MetricArg::Melax => proto::Metric::Melax,
+            } as i32,
+            w: match self.w {
+                WArg::Value(w) => Some(w),
+                WArg::Auto | WArg::Search => None,
+            },
+            w_auto: self.w == WArg::Auto,
+            w_search: self.w == WArg::Search,
+            placement: match self.placement {
+                PlacementArg::Optimal => proto::Placement::Optimal,
+                PlacementArg::Paper => proto::Placement::Paper,
+                PlacementArg::Endpoint => proto::Placement::Endpoint,
+            } as i32,
+            normals: match self.normals {
+                NormalsArg::Linear => proto::NormalUpdate::Linear,
+                NormalsArg::Recompute => proto::NormalUpdate::Recompute,
+            } as i32,
+            boundary: match self.boundary {
+                BoundaryArg::Preserve => proto::BoundaryMode::Preserve,
+                BoundaryArg::Lock => proto::BoundaryMode::Lock,
+            } as i32,
+            max_normal_change_degrees: self.max_normal_change,
+            return_progressive: self.pm.is_some(),
+            compute_hausdorff: self.hausdorff,
+            guard: self.guard,
+        };
+        SimplifyJob { input: self.input.clone(), output: self.output.clone(), options, pm: self.pm.clone() }
+    }
+}
+
+/// `meshlod refine` flags (also `client refine` and batch `refine` jobs).
+#[derive(Debug, Clone, Args)]
+pub struct RefineArgs {
+    /// Input mesh (.obj or .ply).
+    pub input: PathBuf,
+    /// Output mesh (.obj or .ply).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Energy threshold coefficient: threshold = ETC × mean face energy; `auto` (with --faces) takes
+    /// the predictor's estimate instead of the exact search.
+    #[arg(long, required_unless_present = "faces")]
+    pub etc: Option<Auto>,
+    /// Target face count; the ETC reaching it is searched and reported.
+    #[arg(long)]
+    pub faces: Option<u32>,
+    /// What to do (default: subdivide, or with --faces whichever direction reaches the target).
+    #[arg(long, value_enum)]
+    pub mode: Option<ModeArg>,
+    /// Subdivision rounds.
+    #[arg(long, default_value_t = 1)]
+    pub rounds: u32,
+    /// Measure the output against this reference mesh (certified Hausdorff, mean).
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl RefineArgs {
+    /// The job these flags ask for.
+    pub fn job(&self) -> RefineJob {
+        let request = proto::RefineRequest {
+            input: None,
+            etc: match self.etc {
+                Some(Auto::Value(e)) => Some(e),
+                _ => None,
+            },
+            target_faces: self.faces,
+            etc_auto: self.etc == Some(Auto::Auto),
+            mode: match self.mode {
+                None => proto::RefineMode::Unspecified,
+                Some(ModeArg::Simplify) => proto::RefineMode::Simplify,
+                Some(ModeArg::Subdivide) => proto::RefineMode::Subdivide,
+                Some(ModeArg::Both) => proto::RefineMode::Both,
+            } as i32,
+            rounds: Some(self.rounds),
+        };
+        RefineJob { input: self.input.clone(), output: self.output.clone(), request, reference: self.reference.clone() }
+    }
+}
+
+/// `meshlod predict` flags (also `client predict`).
+#[derive(Debug, Clone, Args)]
+pub struct PredictArgs {
+    /// Input mesh.
+    pub input: PathBuf,
+    /// Fraction of faces to remove.
+    #[arg(long, required_unless_present = "faces")]
+    pub ratio: Option<f64>,
+    /// Target face count (with --ratio too: whichever is met first).
+    #[arg(long)]
+    pub faces: Option<u32>,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl PredictArgs {
+    /// The job these flags ask for.
+    pub fn job(&self) -> PredictJob {
+        PredictJob { input: self.input.clone(), target_faces: self.faces, target_ratio: self.ratio }
+    }
+}
+
+/// Log format of the server.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum LogFormat {
+    Text,
+    Json,
+}
+
+/// `meshlod serve` flags; every one has an environment variable for container deployments.
+#[derive(Debug, Args)]
+pub struct ServeArgs {
+    /// gRPC listen address.
+    #[arg(long, env = "MESHLOD_LISTEN", default_value = "127.0.0.1:50051")]
+    pub listen: SocketAddr,
+    /// Prometheus metrics listen address (`/metrics`); empty to disable.
+    #[arg(long, env = "MESHLOD_METRICS_LISTEN", default_value = "127.0.0.1:9090")]
+    pub metrics_listen: String,
+    /// Heavy requests running at once (default: the number of cores). Memory grows with it: see
+    /// deploy/README.md for sizing it with --max-faces against a memory limit.
+    #[arg(long, env = "MESHLOD_MAX_CONCURRENT")]
+    pub max_concurrent: Option<usize>,
+    /// Heavy requests waiting at once before RESOURCE_EXHAUSTED (default: twice the cores).
+    #[arg(long, env = "MESHLOD_MAX_QUEUE")]
+    pub max_queue: Option<usize>,
+    /// Largest gRPC message, MiB.
+    #[arg(long, env = "MESHLOD_MAX_MESSAGE_MIB", default_value_t = 256)]
+    pub max_message_mib: usize,
+    /// Largest mesh accepted, in faces (and in vertices).
+    #[arg(long, env = "MESHLOD_MAX_FACES", default_value_t = MeshLimits::default().max_faces)]
+    pub max_faces: usize,
+    /// TLS certificate (PEM); with --tls-key enables TLS.
+    #[arg(long, env = "MESHLOD_TLS_CERT", requires = "tls_key")]
+    pub tls_cert: Option<PathBuf>,
+    /// TLS private key (PEM).
+    #[arg(long, env = "MESHLOD_TLS_KEY", requires = "tls_cert")]
+    pub tls_key: Option<PathBuf>,
+    /// Require `authorization: Bearer <token>` on every MeshLod call.
+    #[arg(long, env = "MESHLOD_TOKEN", hide_env_values = true)]
+    pub token: Option<String>,
+    /// Log format.
+    #[arg(long, env = "MESHLOD_LOG_FORMAT", value_enum, default_value_t = LogFormat::Text)]
+    pub log_format: LogFormat,
+    /// Predictor model folder (predictor.onnx + metadata.json); default: the model built in.
+    #[arg(long, env = "MESHLOD_MODEL_DIR")]
+    pub model_dir: Option<PathBuf>,
+}
+
+/// Where a server is and how to reach it.
+#[derive(Debug, Clone, Args)]
+pub struct ServerArgs {
+    /// Server address: `host:port`, `http://host:port` or `https://host:port`.
+    #[arg(long, env = "MESHLOD_SERVER", default_value = "127.0.0.1:50051")]
+    pub server: String,
+    /// Bearer token, if the server requires one.
+    #[arg(long, env = "MESHLOD_TOKEN", hide_env_values = true)]
+    pub token: Option<String>,
+    /// Deadline of each call, seconds.
+    #[arg(long, default_value_t = 600.0)]
+    pub timeout: f64,
+}
+
+impl ServerArgs {
+    /// The deadline of each call.
+    pub fn deadline(&self) -> anyhow::Result<Duration> {
+        Duration::try_from_secs_f64(self.timeout)
+            .map_err(|_| anyhow::anyhow!("--timeout {} is not a duration", self.timeout))
+    }
+}
+
+/// `meshlod client` flags.
+#[derive(Debug, Args)]
+pub struct ClientArgs {
+    #[command(flatten)]
+    pub server: ServerArgs,
+    #[command(subcommand)]
+    pub operation: ClientOperation,
+}
+
+/// What the client asks the server for.
+#[derive(Debug, Subcommand)]
+pub enum ClientOperation {
+    /// Simplify on the server (flags and report as `meshlod simplify`).
+    Simplify(SimplifyArgs),
+    /// Refine on the server (flags and report as `meshlod refine`).
+    Refine(RefineArgs),
+    /// Ask the server's predictor for w and ETC (flags and report as `meshlod predict`).
+    Predict(PredictArgs),
+}
+
+/// `meshlod health` flags.
+#[derive(Debug, Args)]
+pub struct HealthArgs {
+    /// Server address: `host:port` or a URL.
+    #[arg(long, env = "MESHLOD_SERVER", default_value = "127.0.0.1:50051")]
+    pub server: String,
+    /// Service to ask about (default: the whole server; `meshlod.v1.MeshLod` for the service).
+    #[arg(long, default_value = "")]
+    pub service: String,
+    /// Give up after this many seconds.
+    #[arg(long, default_value_t = 5.0)]
+    pub timeout: f64,
+}
+
+/// The manifest format, shown by `meshlod batch --help` and in the README.
+pub const MANIFEST_HELP: &str = "\
+The manifest is JSON lines: one job object per line; blank lines and lines starting with # are skipped.
+
+  {\"op\": \"simplify\", \"input\": \"in/bunny.obj\", \"output\": \"out/bunny-10.ply\", \"args\": [\"--ratio\", \"0.9\", \"--pm\", \"out/bunny.pm\"]}
+  {\"op\": \"refine\", \"input\": \"in/cow.obj\", \"output\": \"out/cow-fine.obj\", \"args\": [\"--etc\", \"1.0\"]}
+
+Keys: op (simplify or refine), input, output, and optionally args: the command's flags, as on the
+command line (--json is implied). Any other key is an error. Relative paths, in input, output and in
+the path flags of args (--pm, --reference), are relative to the manifest's folder.
+
+A job whose outputs exist and are newer than its input and the manifest is skipped (--force redoes
+it), so an interrupted batch resumes; a failed job removes what it wrote, so it is never skipped.
+The batch exits non-zero if any job failed.";
+
+/// `meshlod batch` flags.
+#[derive(Debug, Args)]
+#[command(after_long_help = MANIFEST_HELP)]
+pub struct BatchArgs {
+    /// Manifest: one JSON job per line (see below).
+    pub manifest: PathBuf,
+    /// Run against this server instead of locally (one connection for the whole batch).
+    #[arg(long, env = "MESHLOD_SERVER")]
+    pub server: Option<String>,
+    /// Bearer token for the server.
+    #[arg(long, env = "MESHLOD_TOKEN", hide_env_values = true)]
+    pub token: Option<String>,
+    /// Deadline of each remote job, seconds.
+    #[arg(long, default_value_t = 600.0)]
+    pub timeout: f64,
+    /// Jobs at once (default: the number of cores).
+    #[arg(long)]
+    pub jobs: Option<usize>,
+    /// Write the per-job results (JSON lines) here instead of stdout.
+    #[arg(long)]
+    pub results: Option<PathBuf>,
+    /// Redo jobs whose output is already up to date.
+    #[arg(long)]
+    pub force: bool,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Run only the jobs whose index (0-based, in manifest order) modulo `--shard-count` is this
+    /// (default: $JOB_COMPLETION_INDEX, set by a Kubernetes Indexed Job).
+    #[arg(long, env = "JOB_COMPLETION_INDEX", requires = "shard_count")]
+    pub shard_index: Option<usize>,
+    /// Number of shards the manifest is split into (one per pod of an Indexed Job).
+    #[arg(long, env = "MESHLOD_SHARD_COUNT")]
+    pub shard_count: Option<usize>,
+}
+
+/// One batch job, parsed with the same flags as the command line.
+#[derive(Debug, Clone)]
+pub enum Job {
+    Simplify(SimplifyArgs),
+    Refine(RefineArgs),
+}
+
+/// Parses `meshlod OP INPUT -o OUTPUT ARGS…` into a job.
+pub fn parse_job(op: &str, input: &str, output: &str, args: &[String]) -> anyhow::Result<Job> {
+    let argv = ["meshlod", op, input, "-o", output].into_iter().map(String::from).chain(args.iter().cloned());
+    match Cli::try_parse_from(argv).map_err(|e| anyhow::anyhow!("{}", e.render().to_string().trim()))?.command {
+        Command::Simplify(a) => Ok(Job::Simplify(a)),
+        Command::Refine(a) => Ok(Job::Refine(a)),
+        _ => anyhow::bail!("op must be simplify or refine, not {op}"),
+    }
+}

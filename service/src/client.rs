@@ -1,0 +1,182 @@
+//! A client of a meshlod server: one connection, reused by every job of a batch, and the
+//! [`Executor`] that sends jobs to it. Inputs are read and outputs written here, so a remote job
+//! takes the same files and gives the same report as a local one.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use anyhow::{Context, Result};
+use meshlod_engine::io::read_mesh;
+use tonic::codec::CompressionEncoding;
+use tonic::transport::{Channel, Endpoint};
+
+use crate::convert::{MeshLimits, mesh_from_proto, mesh_to_proto, progressive_from_proto};
+use crate::executor::{
+    Executor, PredictJob, RefineJob, SimplifyJob, check_simplify_outputs, finish_refine, finish_simplify,
+};
+use crate::proto;
+use crate::proto::mesh_lod_client::MeshLodClient;
+use crate::report::{self, Report};
+
+/// The server address as tonic wants it: `host:port` gains `http://`.
+pub fn endpoint_uri(server: &str) -> String {
+    if server.contains("://") { server.to_string() } else { format!("http://{server}") }
+}
+
+/// A channel to `server` (`http://host:port`, `https://…` or plain `host:port`); `timeout` is each
+/// call's deadline.
+pub async fn channel(server: &str, timeout: Duration) -> Result<Channel> {
+    let uri = endpoint_uri(server);
+    let endpoint = Endpoint::from_shared(uri.clone())
+        .with_context(|| format!("server address {server}"))?
+        .timeout(timeout)
+        .connect_timeout(Duration::from_secs(10));
+    endpoint.connect().await.with_context(|| format!("connecting to {uri}"))
+}
+
+/// A MeshLod client on `channel` with the service's limits and compression.
+pub fn mesh_lod(channel: Channel) -> MeshLodClient<Channel> {
+    MeshLodClient::new(channel)
+        .max_decoding_message_size(usize::MAX)
+        .max_encoding_message_size(usize::MAX)
+        .send_compressed(CompressionEncoding::Gzip)
+        .accept_compressed(CompressionEncoding::Gzip)
+}
+
+/// Asks the server's standard health service (grpc.health.v1) whether `service` ("" for the
+/// whole server) is serving.
+pub async fn health(server: &str, service: &str, timeout: Duration) -> Result<()> {
+    use tonic_health::pb::health_check_response::ServingStatus;
+    use tonic_health::pb::health_client::HealthClient;
+    let mut client = HealthClient::new(channel(server, timeout).await?);
+    let response = client
+        .check(tonic_health::pb::HealthCheckRequest { service: service.to_string() })
+        .await
+        .with_context(|| format!("health check of {server}"))?
+        .into_inner();
+    match ServingStatus::try_from(response.status) {
+        Ok(ServingStatus::Serving) => Ok(()),
+        other => anyhow::bail!("{server}: not serving ({other:?})"),
+    }
+}
+
+/// Meshes whose positions and indices exceed this many bytes are uploaded in chunks.
+const UPLOAD_ABOVE_BYTES: usize = 32 << 20;
+/// Values (floats or indices) per upload chunk: 1 MiB of each.
+const CHUNK_VALUES: usize = 1 << 18;
+
+/// Splits a mesh into upload chunks; the options travel with the first.
+fn chunked(mesh: &proto::Mesh, options: Option<proto::SimplifyOptions>) -> Vec<proto::MeshChunk> {
+    let count = mesh.positions.len().max(mesh.indices.len()).div_ceil(CHUNK_VALUES).max(1);
+    (0..count)
+        .map(|i| {
+            let range = |len: usize| (i * CHUNK_VALUES).min(len)..((i + 1) * CHUNK_VALUES).min(len);
+            proto::MeshChunk {
+                options: if i == 0 { options } else { None },
+                positions: mesh.positions[range(mesh.positions.len())].to_vec(),
+                indices: mesh.indices[range(mesh.indices.len())].to_vec(),
+            }
+        })
+        .collect()
+}
+
+/// Runs jobs on a server over one connection. Its methods block on its own runtime, so it can be
+/// used from plain threads (a batch's workers), not from inside another async runtime.
+pub struct Remote {
+    runtime: tokio::runtime::Runtime,
+    client: MeshLodClient<Channel>,
+    token: Option<Arc<str>>,
+}
+
+impl Remote {
+    /// Connects to `server`; `timeout` is each call's deadline.
+    pub fn connect(server: &str, token: Option<String>, timeout: Duration) -> Result<Remote> {
+        let runtime = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(2)
+            .enable_all()
+            .build()
+            .context("starting the async runtime")?;
+        let client = mesh_lod(runtime.block_on(channel(server, timeout))?);
+        Ok(Remote { runtime, client, token: token.map(Arc::from) })
+    }
+
+    fn request<T>(&self, message: T) -> Result<tonic::Request<T>> {
+        let mut request = tonic::Request::new(message);
+        if let Some(t) = &self.token {
+            request.metadata_mut().insert("authorization", format!("Bearer {t}").parse().context("token")?);
+        }
+        Ok(request)
+    }
+}
+
+fn input_of(mesh: &meshlod_engine::Mesh) -> proto::MeshInput {
+    proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(mesh_to_proto(mesh))) }
+}
+
+/// A status from the server as an error for people.
+fn status_error(status: tonic::Status) -> anyhow::Error {
+    anyhow::anyhow!("server: {} ({:?})", status.message(), status.code())
+}
+
+impl Executor for Remote {
+    fn simplify(&self, job: &SimplifyJob) -> Result<Report> {
+        check_simplify_outputs(job)?;
+        let mesh = read_mesh(&job.input)?;
+        let options = proto::SimplifyOptions { return_progressive: job.pm.is_some(), ..job.options };
+        let mut client = self.client.clone();
+        let response = self.runtime.block_on(async {
+            let input = mesh_to_proto(&mesh);
+            // Meshes over 32 MiB go up in 1 MiB chunks (SimplifyUpload) instead of one message.
+            if 4 * (input.positions.len() + input.indices.len()) > UPLOAD_ABOVE_BYTES {
+                let chunks = chunked(&input, Some(options));
+                client.simplify_upload(self.request(tokio_stream::iter(chunks))?).await.map_err(status_error)
+            } else {
+                let request = proto::SimplifyRequest {
+                    input: Some(proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(input)) }),
+                    options: Some(options),
+                };
+                client.simplify(self.request(request)?).await.map_err(status_error)
+            }
+        })?;
+        let response = response.into_inner();
+        let out =
+            mesh_from_proto(response.mesh.as_ref().context("response without mesh")?, "mesh", &MeshLimits::default())?;
+        let progressive = match &response.progressive {
+            Some(pm) => {
+                Some(progressive_from_proto(pm.base.as_ref().context("progressive mesh without base")?, &pm.splits)?)
+            }
+            None => None,
+        };
+        let stats = response.stats.unwrap_or_default();
+        finish_simplify(job, &out, progressive.as_ref(), &stats, response.hausdorff.as_ref())
+    }
+
+    fn refine(&self, job: &RefineJob) -> Result<Report> {
+        meshlod_engine::io::output_format(&job.output)?;
+        let mesh = read_mesh(&job.input)?;
+        let request = proto::RefineRequest { input: Some(input_of(&mesh)), ..job.request.clone() };
+        let mut client = self.client.clone();
+        let response = self
+            .runtime
+            .block_on(async { client.refine(self.request(request)?).await.map_err(status_error) })?
+            .into_inner();
+        let out =
+            mesh_from_proto(response.mesh.as_ref().context("response without mesh")?, "mesh", &MeshLimits::default())?;
+        finish_refine(job, &out, &response.stats.unwrap_or_default())
+    }
+
+    fn predict(&self, job: &PredictJob) -> Result<Report> {
+        let mesh = read_mesh(&job.input)?;
+        let request = proto::PredictRequest {
+            subject: Some(proto::predict_request::Subject::Input(input_of(&mesh))),
+            target_faces: job.target_faces,
+            target_ratio: job.target_ratio,
+        };
+        let mut client = self.client.clone();
+        let response = self
+            .runtime
+            .block_on(async { client.predict(self.request(request)?).await.map_err(status_error) })?
+            .into_inner();
+        Ok(report::predict(&response))
+    }
+}

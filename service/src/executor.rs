@@ -1,0 +1,178 @@
+//! Jobs on files, and the one trait that runs them here ([`Local`]) or on a server
+//! ([`crate::client::Remote`]). A job reads its input, runs, writes its outputs and returns its
+//! report; both executors finish a job with the same code, so their reports have the same keys.
+//! The CLI's single commands, `meshlod client` and `meshlod batch` all go through here.
+
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, OnceLock};
+
+use anyhow::{Context, Result};
+use meshlod_engine::Mesh;
+use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
+use meshlod_engine::io::{output_format, read_mesh, write_mesh};
+use meshlod_engine::pm::ProgressiveMesh;
+use meshlod_engine::pm_format::encode;
+use meshlod_predictor::Predictor;
+
+use crate::proto;
+use crate::report::{self, Report};
+
+/// One simplification of a file.
+#[derive(Debug, Clone)]
+pub struct SimplifyJob {
+    /// Input mesh.
+    pub input: PathBuf,
+    /// Output mesh (its extension picks the format).
+    pub output: PathBuf,
+    /// The options, as the contract has them (`return_progressive` is set from `pm`).
+    pub options: proto::SimplifyOptions,
+    /// Where to write the progressive mesh, if anywhere.
+    pub pm: Option<PathBuf>,
+}
+
+/// One refinement of a file.
+#[derive(Debug, Clone)]
+pub struct RefineJob {
+    /// Input mesh.
+    pub input: PathBuf,
+    /// Output mesh.
+    pub output: PathBuf,
+    /// The request, as the contract has it (its `input` is filled in by the executor).
+    pub request: proto::RefineRequest,
+    /// Measure the output against this mesh.
+    pub reference: Option<PathBuf>,
+}
+
+/// One prediction for a file.
+#[derive(Debug, Clone)]
+pub struct PredictJob {
+    /// Input mesh.
+    pub input: PathBuf,
+    /// Faces to keep.
+    pub target_faces: Option<u32>,
+    /// Fraction of faces to remove.
+    pub target_ratio: Option<f64>,
+}
+
+/// Runs jobs: here, or on a server. Shared by the threads of a batch.
+pub trait Executor: Sync {
+    /// Runs a simplification and writes its outputs.
+    fn simplify(&self, job: &SimplifyJob) -> Result<Report>;
+    /// Runs a refinement and writes its output.
+    fn refine(&self, job: &RefineJob) -> Result<Report>;
+    /// Asks the predictor.
+    fn predict(&self, job: &PredictJob) -> Result<Report>;
+}
+
+/// Reads a job's input mesh.
+pub fn load(path: &Path) -> Result<Mesh> {
+    Ok(read_mesh(path)?)
+}
+
+/// Checks what a simplify job will write before any work: a mesh format and folders that exist.
+pub fn check_simplify_outputs(job: &SimplifyJob) -> Result<()> {
+    output_format(&job.output)?;
+    if let Some(pm) = &job.pm
+        && let Some(parent) = pm.parent().filter(|p| !p.as_os_str().is_empty())
+        && !parent.is_dir()
+    {
+        anyhow::bail!("{}: its folder does not exist", pm.display());
+    }
+    Ok(())
+}
+
+/// The end of every simplify job, wherever it ran: writes the mesh and the progressive mesh, and
+/// builds the report.
+pub fn finish_simplify(
+    job: &SimplifyJob,
+    mesh: &Mesh,
+    progressive: Option<&ProgressiveMesh>,
+    stats: &proto::SimplifyStats,
+    measured: Option<&proto::HausdorffReport>,
+) -> Result<Report> {
+    write_mesh(&job.output, mesh)?;
+    let mut report = report::simplify(stats, measured);
+    if let Some(path) = &job.pm {
+        let pm = progressive.context("the run returned no progressive mesh")?;
+        let bytes = encode(pm);
+        std::fs::write(path, &bytes).with_context(|| format!("writing {}", path.display()))?;
+        report.extend(report::progressive(pm, bytes.len()));
+    }
+    Ok(report)
+}
+
+/// The end of every refine job: writes the mesh, measures it against the reference if asked.
+pub fn finish_refine(job: &RefineJob, mesh: &Mesh, stats: &proto::RefineStats) -> Result<Report> {
+    write_mesh(&job.output, mesh)?;
+    let mut report = report::refine(stats);
+    if let Some(reference) = &job.reference {
+        let reference_mesh = load(reference)?;
+        let d = hausdorff(&reference_mesh, mesh, &HausdorffOptions::default())?;
+        report.extend(report::reference(&d));
+    }
+    Ok(report)
+}
+
+/// Runs jobs in this process; the predictor is loaded on first use.
+#[derive(Debug, Default)]
+pub struct Local {
+    model_dir: Option<PathBuf>,
+    predictor: OnceLock<std::result::Result<Arc<Predictor>, String>>,
+}
+
+impl Local {
+    /// An executor whose predictor comes from `model_dir` (`predictor.onnx` and `metadata.json`),
+    /// or is the one built in.
+    pub fn new(model_dir: Option<PathBuf>) -> Local {
+        Local { model_dir, predictor: OnceLock::new() }
+    }
+
+    /// The predictor, loaded once.
+    pub fn predictor(&self) -> Result<Arc<Predictor>> {
+        self.predictor
+            .get_or_init(|| {
+                crate::predict::load(self.model_dir.as_deref())
+                    .map(Arc::new)
+                    .map_err(|e| format!("loading the predictor model: {e}"))
+            })
+            .clone()
+            .map_err(anyhow::Error::msg)
+    }
+
+    fn predictor_if(&self, needed: bool) -> Result<Option<Arc<Predictor>>> {
+        if needed { self.predictor().map(Some) } else { Ok(None) }
+    }
+}
+
+/// A status from the jobs as an error for people: its message names the field.
+fn status_error(status: tonic::Status) -> anyhow::Error {
+    anyhow::anyhow!("{}", status.message())
+}
+
+impl Executor for Local {
+    fn simplify(&self, job: &SimplifyJob) -> Result<Report> {
+        check_simplify_outputs(job)?;
+        let mesh = load(&job.input)?;
+        let options = proto::SimplifyOptions { return_progressive: job.pm.is_some(), ..job.options };
+        let predictor = self.predictor_if(options.w_auto)?;
+        let run = crate::jobs::simplify(&mesh, &options, predictor.as_deref(), None).map_err(status_error)?;
+        finish_simplify(job, &run.result.mesh, run.result.progressive.as_ref(), &run.stats, run.hausdorff.as_ref())
+    }
+
+    fn refine(&self, job: &RefineJob) -> Result<Report> {
+        output_format(&job.output)?;
+        let mesh = load(&job.input)?;
+        let predictor = self.predictor_if(job.request.etc_auto)?;
+        let (result, stats) =
+            crate::jobs::refine(&mesh, &job.request, predictor.as_deref(), None, usize::MAX).map_err(status_error)?;
+        finish_refine(job, &result.mesh, &stats)
+    }
+
+    fn predict(&self, job: &PredictJob) -> Result<Report> {
+        let mesh = load(&job.input)?;
+        let predictor = self.predictor()?;
+        let response =
+            crate::jobs::predict_mesh(&predictor, &mesh, job.target_faces, job.target_ratio).map_err(status_error)?;
+        Ok(report::predict(&response))
+    }
+}

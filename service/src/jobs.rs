@@ -1,0 +1,274 @@
+//! The operations behind every front end, from the contract's options to the engine and back:
+//! one simplification, refinement or prediction of a mesh already in memory. The server runs them
+//! inside its admission control; the CLI runs them directly; the client sends the same options to
+//! a server that runs them. So a flag means the same thing everywhere, and every report is built
+//! from the same contract messages ([`crate::report`]).
+//!
+//! Errors are gRPC statuses whose message starts with the request field it concerns
+//! (`options.target_ratio: …`); the CLI prints the message.
+
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use meshlod_engine::Mesh;
+use meshlod_engine::features::{SHAPE_FEATURE_NAMES, W_CLASSES, shape_features};
+use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
+use meshlod_engine::refine::{RefineMode, RefineOptions, Refined, refine as engine_refine};
+use meshlod_engine::simplify::{Metric, NormalUpdate, Simplified, SimplifyOptions, simplify as engine_simplify};
+use meshlod_engine::simplify::{prepare, simplify_search_w};
+use meshlod_predictor::Predictor;
+use tonic::Status;
+
+use crate::convert::{self, engine_status};
+use crate::proto;
+
+/// What [`simplify`] produced.
+#[derive(Debug)]
+pub struct Simplification {
+    /// The engine's result (mesh, progressive mesh when asked for, figures).
+    pub result: Simplified,
+    /// The figures as the contract reports them.
+    pub stats: proto::SimplifyStats,
+    /// The measured distance, when asked for.
+    pub hausdorff: Option<proto::HausdorffReport>,
+}
+
+/// Options that are accepted but change nothing, said back to the caller.
+pub fn simplify_warnings(o: &proto::SimplifyOptions) -> Vec<String> {
+    let metric = proto::Metric::try_from(o.metric).unwrap_or(proto::Metric::Unspecified);
+    let quadric_w0 = matches!(metric, proto::Metric::Qem)
+        || (matches!(metric, proto::Metric::Unspecified | proto::Metric::Qfvp)
+            && !o.w_auto
+            && !o.w_search
+            && o.w.unwrap_or(0.0) == 0.0);
+    let mut out = Vec::new();
+    if matches!(metric, proto::Metric::Qem | proto::Metric::Melax) && (o.w.is_some_and(|w| w != 0.0) || o.w_auto) {
+        out.push(format!("w has no effect with the {} metric", metric.as_str_name().trim_start_matches("METRIC_")));
+    }
+    if quadric_w0 && o.normals == proto::NormalUpdate::Recompute as i32 {
+        out.push("normals recompute has no effect at w = 0: the vertex normals only enter QFVP's normal term".into());
+    }
+    out
+}
+
+/// Simplifies `mesh` with the contract's options; `w_auto` asks `predictor`.
+pub fn simplify(
+    mesh: &Mesh,
+    o: &proto::SimplifyOptions,
+    predictor: Option<&Predictor>,
+    cancel: Option<Arc<AtomicBool>>,
+) -> Result<Simplification, Status> {
+    if o.w_auto && o.w_search {
+        return Err(Status::invalid_argument("options.w_search: not together with options.w_auto"));
+    }
+    // Every option checked before any work, the predictor's included.
+    let mut options = SimplifyOptions::try_from(o)?;
+    options.validate().map_err(|e| engine_status(e, "options"))?;
+    options.cancel = cancel;
+    let (w_source, model_version) = if o.w_search {
+        (proto::WSource::Searched, String::new())
+    } else if o.w_auto {
+        let predictor = predictor
+            .ok_or_else(|| Status::failed_precondition("options.w_auto: this server runs without a predictor model"))?;
+        // The target the run will stop at, as the engine counts it.
+        let target = options.face_target_for(mesh);
+        let advice = crate::predict::advise(predictor, mesh, target).map_err(|e| Status::internal(e.to_string()))?;
+        if let Metric::Qfvp { w } = &mut options.metric {
+            *w = advice.w.w;
+        }
+        (proto::WSource::Predicted, advice.model_version)
+    } else {
+        (proto::WSource::Given, String::new())
+    };
+    // A search has measured its result already; `measured` keeps that for compute_hausdorff.
+    let (result, w_candidates, measured) = if o.w_search {
+        let search = simplify_search_w(mesh, &options, &W_CLASSES).map_err(|e| engine_status(e, "options"))?;
+        options.metric = Metric::Qfvp { w: search.w };
+        let candidates = search.errors.iter().map(|&(w, hausdorff)| proto::WCandidate { w, hausdorff }).collect();
+        (search.best, candidates, Some(search.hausdorff))
+    } else {
+        (engine_simplify(mesh, &options).map_err(|e| engine_status(e, "options"))?, Vec::new(), None)
+    };
+    let hausdorff = if o.compute_hausdorff {
+        let d = match measured {
+            Some(d) => d,
+            None => {
+                let h = HausdorffOptions { cancel: options.cancel.clone(), ..Default::default() };
+                hausdorff(mesh, &result.mesh, &h).map_err(|e| engine_status(e, "options"))?
+            }
+        };
+        Some(convert::hausdorff_to_proto(&d))
+    } else {
+        None
+    };
+    let s = &result.stats;
+    let stats = proto::SimplifyStats {
+        faces_in: s.faces_in as u32,
+        faces_out: s.faces_out as u32,
+        vertices_in: s.vertices_in as u32,
+        vertices_out: s.vertices_out as u32,
+        collapses: s.collapses as u32,
+        stop_reason: s.stop_reason.as_str().to_string(),
+        metric: options.metric.name().to_string(),
+        w: options.metric.w().unwrap_or(0.0),
+        w_source: w_source as i32,
+        model_version,
+        max_collapse_error: s.max_collapse_error,
+        seconds: s.seconds,
+        w_candidates,
+        guard: options.guard,
+        warnings: simplify_warnings(o),
+        frozen_vertices: s.frozen_vertices as u32,
+        target_faces: s.target_faces as u32,
+        rejected: s.rejected as u64,
+        placement: format!("{:?}", options.placement).to_lowercase(),
+        normals: match options.normals {
+            NormalUpdate::Linear => "linear".into(),
+            NormalUpdate::Recompute => "recompute".into(),
+        },
+        boundary: format!("{:?}", options.boundary).to_lowercase(),
+    };
+    Ok(Simplification { result, stats, hausdorff })
+}
+
+/// The refiner's options from the contract's request (its `input` is not read): the mode
+/// inferred where unspecified, the ETC predicted where `etc_auto` asks for it. Also returns where
+/// the ETC comes from and the model's version when it was predicted.
+fn refine_options(
+    mesh: &Mesh,
+    r: &proto::RefineRequest,
+    predictor: Option<&Predictor>,
+) -> Result<(RefineOptions, &'static str, String), Status> {
+    let mut etc = r.etc;
+    let mut target_faces = r.target_faces.map(|n| n as usize);
+    let mut model_version = String::new();
+    if r.etc_auto {
+        if r.etc.is_some() {
+            return Err(Status::invalid_argument("etc: give etc or etc_auto, not both"));
+        }
+        let predictor = predictor
+            .ok_or_else(|| Status::failed_precondition("etc_auto: this server runs without a predictor model"))?;
+        let target =
+            target_faces.ok_or_else(|| Status::invalid_argument("target_faces: etc_auto needs a target face count"))?;
+        let advice = crate::predict::advise(predictor, mesh, target).map_err(|e| Status::internal(e.to_string()))?;
+        etc = Some(advice.etc);
+        target_faces = None;
+        model_version = advice.model_version;
+    } else if r.etc.is_some() && r.target_faces.is_some() {
+        return Err(Status::invalid_argument(
+            "etc: give etc or target_faces, not both (or etc_auto with target_faces)",
+        ));
+    }
+    let mode = match proto::RefineMode::try_from(r.mode) {
+        Ok(proto::RefineMode::Simplify) => RefineMode::Simplify,
+        Ok(proto::RefineMode::Subdivide) => RefineMode::Subdivide,
+        Ok(proto::RefineMode::Both) => RefineMode::Both,
+        // The direction that reaches the target, or subdivision.
+        Ok(proto::RefineMode::Unspecified) => match r.target_faces {
+            Some(n) if (n as usize) < mesh.face_count() => RefineMode::Simplify,
+            _ => RefineMode::Subdivide,
+        },
+        Err(_) => return Err(Status::invalid_argument(format!("mode: unknown value {}", r.mode))),
+    };
+    let source = if r.etc_auto {
+        "predicted"
+    } else if r.etc.is_some() {
+        "given"
+    } else {
+        "searched"
+    };
+    let options = RefineOptions { etc, target_faces, mode, rounds: r.rounds.unwrap_or(1), cancel: None };
+    Ok((options, source, model_version))
+}
+
+/// Refines `mesh` as the contract's request says (its `input` is not read); the result may have at
+/// most `max_faces` faces.
+pub fn refine(
+    mesh: &Mesh,
+    r: &proto::RefineRequest,
+    predictor: Option<&Predictor>,
+    cancel: Option<Arc<AtomicBool>>,
+    max_faces: usize,
+) -> Result<(Refined, proto::RefineStats), Status> {
+    let (mut options, etc_source, model_version) = refine_options(mesh, r, predictor)?;
+    options.cancel = cancel;
+    let result = engine_refine(mesh, &options).map_err(|e| engine_status(e, ""))?;
+    if result.mesh.face_count() > max_faces {
+        return Err(Status::invalid_argument(format!(
+            "rounds: the result would have {} faces, over the limit of {max_faces}",
+            result.mesh.face_count()
+        )));
+    }
+    let s = &result.stats;
+    let stats = proto::RefineStats {
+        faces_in: s.faces_in as u32,
+        faces_out: s.faces_out as u32,
+        etc: s.etc,
+        mode: format!("{:?}", s.mode).to_lowercase(),
+        split_edges: s.split_edges as u32,
+        collapses: s.collapses as u32,
+        seconds: s.seconds,
+        threshold: s.threshold,
+        rounds: s.rounds,
+        etc_source: etc_source.into(),
+        model_version,
+    };
+    Ok((result, stats))
+}
+
+/// The predictor's advice for shape features of a mesh of `faces_in` faces and a target given as
+/// the contract gives it (faces kept and/or ratio removed: whichever is met first, as
+/// [`SimplifyOptions::face_target`] has it).
+pub fn predict(
+    predictor: &Predictor,
+    shape: &[f32; 8],
+    faces_in: usize,
+    target_faces: Option<u32>,
+    target_ratio: Option<f64>,
+) -> Result<proto::PredictResponse, Status> {
+    if target_faces.is_none() && target_ratio.is_none() {
+        return Err(Status::invalid_argument("target_faces: give target_faces or target_ratio"));
+    }
+    let targets =
+        SimplifyOptions { target_faces: target_faces.map(|n| n as usize), target_ratio, ..Default::default() };
+    targets.validate().map_err(|e| engine_status(e, ""))?;
+    let target = targets.face_target(faces_in).max(1);
+    let advice = crate::predict::advise_features(predictor, shape, faces_in, target)
+        .map_err(|e| Status::invalid_argument(format!("features.values: {e}")))?;
+    Ok(proto::PredictResponse {
+        w: advice.w.w,
+        probabilities: advice.w.probabilities,
+        classes: advice.w.classes,
+        etc: advice.etc,
+        model_version: advice.model_version,
+        faces_in: faces_in as u64,
+        target_faces: target as u64,
+        etc_mode: if target > faces_in { "subdivide" } else { "simplify" }.into(),
+    })
+}
+
+/// [`predict`] for a mesh: its shape features computed here.
+pub fn predict_mesh(
+    predictor: &Predictor,
+    mesh: &Mesh,
+    target_faces: Option<u32>,
+    target_ratio: Option<f64>,
+) -> Result<proto::PredictResponse, Status> {
+    // Faces that repeat a vertex are dropped first, as the simplifier does.
+    let (mesh, _, _) = prepare(mesh);
+    predict(predictor, &shape_features(&mesh), mesh.face_count(), target_faces, target_ratio)
+}
+
+/// The shape features a Predict request carries instead of a mesh, checked.
+pub fn features_from_proto(f: &proto::ShapeFeatures) -> Result<[f32; 8], Status> {
+    let shape: [f32; 8] = f.values.as_slice().try_into().map_err(|_| {
+        Status::invalid_argument(format!(
+            "features.values: expected the 8 shape features {SHAPE_FEATURE_NAMES:?}, got {} values",
+            f.values.len()
+        ))
+    })?;
+    if let Some(i) = shape.iter().position(|v| !v.is_finite()) {
+        return Err(Status::invalid_argument(format!("features.values[{i}]: {} is not finite", shape[i])));
+    }
+    Ok(shape)
+}

@@ -1,0 +1,230 @@
+//! The MeshLod RPCs: each reads its request's mesh (with the size limits), runs the operation
+//! from `crate::jobs` in an admitted slot, and converts the result back. Nothing here checks an
+//! option: the jobs do, once for every front end.
+
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+use meshlod_engine::hausdorff::{check_surface, hausdorff};
+use tokio::sync::mpsc;
+use tokio_stream::wrappers::ReceiverStream;
+use tonic::{Request, Response, Status};
+
+use super::ServerConfig;
+use super::admission::Admission;
+use crate::convert::{self, engine_status, mesh_from_input, mesh_to_proto, progressive_to_proto, split_to_proto};
+use crate::jobs;
+use crate::metrics::Metrics;
+use crate::proto;
+use crate::proto::mesh_lod_server::MeshLod;
+
+/// The MeshLod service.
+#[derive(Clone)]
+pub struct MeshLodService {
+    config: Arc<ServerConfig>,
+    admission: Arc<Admission>,
+    metrics: Arc<Metrics>,
+}
+
+impl MeshLodService {
+    /// A service with its own admission control and metrics.
+    pub fn new(config: ServerConfig, metrics: Arc<Metrics>) -> Self {
+        let admission = Admission::new(config.max_concurrent, config.max_queue, metrics.clone());
+        MeshLodService { config: Arc::new(config), admission: Arc::new(admission), metrics }
+    }
+
+    /// Runs `work` once admitted, and records its outcome.
+    async fn run<T: Send + 'static>(
+        &self,
+        method: &'static str,
+        work: impl FnOnce(Arc<AtomicBool>) -> Result<T, Status> + Send + 'static,
+    ) -> Result<T, Status> {
+        let started = Instant::now();
+        let result = self.admission.run(work).await;
+        let code = result.as_ref().map_or_else(|s| s.code(), |_| tonic::Code::Ok);
+        self.metrics.record(method, code, started.elapsed());
+        match &result {
+            Ok(_) => tracing::info!(method, ms = started.elapsed().as_millis() as u64, "ok"),
+            Err(s) => tracing::warn!(method, code = ?s.code(), message = s.message(), "refused or failed"),
+        }
+        result
+    }
+
+    /// Reads the request's mesh and simplifies it; `progressive` forces the progressive mesh on.
+    fn simplification(
+        &self,
+        request: proto::SimplifyRequest,
+        progressive: bool,
+    ) -> impl FnOnce(Arc<AtomicBool>) -> Result<jobs::Simplification, Status> + Send + 'static {
+        let limits = self.config.limits;
+        let predictor = self.config.predictor.clone();
+        move |cancel| {
+            let mesh = mesh_from_input(request.input.as_ref(), "input", &limits)?;
+            let mut options = request.options.unwrap_or_default();
+            options.return_progressive |= progressive;
+            jobs::simplify(&mesh, &options, predictor.as_deref(), Some(cancel))
+        }
+    }
+
+    /// One simplification answered in one message (Simplify and SimplifyUpload).
+    async fn simplify_unary(
+        &self,
+        method: &'static str,
+        request: proto::SimplifyRequest,
+    ) -> Result<Response<proto::SimplifyResponse>, Status> {
+        let run = self.run(method, self.simplification(request, false)).await?;
+        Ok(Response::new(proto::SimplifyResponse {
+            mesh: Some(mesh_to_proto(&run.result.mesh)),
+            progressive: run.result.progressive.as_ref().map(progressive_to_proto),
+            stats: Some(run.stats),
+            hausdorff: run.hausdorff,
+        }))
+    }
+}
+
+#[tonic::async_trait]
+impl MeshLod for MeshLodService {
+    async fn simplify(
+        &self,
+        request: Request<proto::SimplifyRequest>,
+    ) -> Result<Response<proto::SimplifyResponse>, Status> {
+        self.simplify_unary("Simplify", request.into_inner()).await
+    }
+
+    type SimplifyStreamStream = ReceiverStream<Result<proto::SimplifyStreamMessage, Status>>;
+
+    async fn simplify_stream(
+        &self,
+        request: Request<proto::SimplifyRequest>,
+    ) -> Result<Response<Self::SimplifyStreamStream>, Status> {
+        let run = self.run("SimplifyStream", self.simplification(request.into_inner(), true)).await?;
+        let pm = run.result.progressive.expect("progressive forced on");
+        let stats = run.stats;
+        // Splits are ~20–40 bytes encoded; batch so each message stays under the configured size.
+        let per_batch = (self.config.stream_message_bytes / 48).max(1);
+        let (tx, rx) = mpsc::channel(4);
+        tokio::spawn(async move {
+            use proto::simplify_stream_message::Item;
+            let send = |item| proto::SimplifyStreamMessage { item: Some(item) };
+            if tx.send(Ok(send(Item::Base(mesh_to_proto(pm.base()))))).await.is_err() {
+                return;
+            }
+            for (i, chunk) in pm.splits().chunks(per_batch).enumerate() {
+                let batch = proto::VertexSplitBatch {
+                    first: (i * per_batch) as u32,
+                    splits: chunk.iter().map(split_to_proto).collect(),
+                };
+                if tx.send(Ok(send(Item::Splits(batch)))).await.is_err() {
+                    return; // the client went away
+                }
+            }
+            let _ = tx.send(Ok(send(Item::Stats(stats)))).await;
+        });
+        Ok(Response::new(ReceiverStream::new(rx)))
+    }
+
+    async fn simplify_upload(
+        &self,
+        request: Request<tonic::Streaming<proto::MeshChunk>>,
+    ) -> Result<Response<proto::SimplifyResponse>, Status> {
+        let mut stream = request.into_inner();
+        let limits = self.config.limits;
+        let mut options = None;
+        let mut mesh = proto::Mesh::default();
+        while let Some(chunk) = stream.message().await? {
+            if options.is_none() {
+                options = Some(chunk.options.unwrap_or_default());
+            }
+            mesh.positions.extend_from_slice(&chunk.positions);
+            mesh.indices.extend_from_slice(&chunk.indices);
+            if mesh.positions.len() / 3 > limits.max_vertices || mesh.indices.len() / 3 > limits.max_faces {
+                return Err(Status::invalid_argument(format!(
+                    "input: mesh too large: the upload passed {} vertices or {} faces",
+                    limits.max_vertices, limits.max_faces
+                )));
+            }
+        }
+        let request = proto::SimplifyRequest {
+            input: Some(proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(mesh)) }),
+            options,
+        };
+        self.simplify_unary("SimplifyUpload", request).await
+    }
+
+    async fn refine(&self, request: Request<proto::RefineRequest>) -> Result<Response<proto::RefineResponse>, Status> {
+        let request = request.into_inner();
+        let predictor = self.config.predictor.clone();
+        let limits = self.config.limits;
+        let response = self
+            .run("Refine", move |cancel| {
+                let mesh = mesh_from_input(request.input.as_ref(), "input", &limits)?;
+                let (result, stats) =
+                    jobs::refine(&mesh, &request, predictor.as_deref(), Some(cancel), limits.max_faces)?;
+                Ok(proto::RefineResponse { mesh: Some(mesh_to_proto(&result.mesh)), stats: Some(stats) })
+            })
+            .await?;
+        Ok(Response::new(response))
+    }
+
+    async fn hausdorff(
+        &self,
+        request: Request<proto::HausdorffRequest>,
+    ) -> Result<Response<proto::HausdorffReport>, Status> {
+        let request = request.into_inner();
+        let limits = self.config.limits;
+        let report = self
+            .run("Hausdorff", move |cancel| {
+                let mut options = convert::hausdorff_options(request.tolerance, request.samples)?;
+                let a = mesh_from_input(request.a.as_ref(), "a", &limits)?;
+                let b = mesh_from_input(request.b.as_ref(), "b", &limits)?;
+                options.cancel = Some(cancel);
+                // Each mesh checked on its own, so that the error names its field.
+                for (mesh, field) in [(&a, "a"), (&b, "b")] {
+                    check_surface(mesh).map_err(|e| Status::invalid_argument(format!("{field}: {e}")))?;
+                }
+                let d = hausdorff(&a, &b, &options).map_err(|e| engine_status(e, ""))?;
+                Ok(convert::hausdorff_to_proto(&d))
+            })
+            .await?;
+        Ok(Response::new(report))
+    }
+
+    async fn predict(
+        &self,
+        request: Request<proto::PredictRequest>,
+    ) -> Result<Response<proto::PredictResponse>, Status> {
+        let request = request.into_inner();
+        let limits = self.config.limits;
+        let Some(predictor) = self.config.predictor.clone() else {
+            self.metrics.record("Predict", tonic::Code::FailedPrecondition, std::time::Duration::ZERO);
+            return Err(Status::failed_precondition("this server runs without a predictor model"));
+        };
+        let response = self
+            .run("Predict", move |_cancel| {
+                let subject = request.subject.as_ref().ok_or_else(|| Status::invalid_argument("subject: missing"))?;
+                match subject {
+                    proto::predict_request::Subject::Input(input) => {
+                        let mesh = mesh_from_input(Some(input), "input", &limits)?;
+                        jobs::predict_mesh(&predictor, &mesh, request.target_faces, request.target_ratio)
+                    }
+                    proto::predict_request::Subject::Features(f) => {
+                        let shape = jobs::features_from_proto(f)?;
+                        // Without a mesh, the face count comes from the target: faces and ratio.
+                        let (Some(t), Some(r)) = (request.target_faces, request.target_ratio) else {
+                            return Err(Status::invalid_argument(
+                                "target_ratio: with features, give target_faces and target_ratio",
+                            ));
+                        };
+                        if !(0.0..1.0).contains(&r) {
+                            return Err(Status::invalid_argument(format!("target_ratio: {r} is outside [0, 1)")));
+                        }
+                        let faces_in = (t as f64 / (1.0 - r)).round() as usize;
+                        jobs::predict(&predictor, &shape, faces_in, Some(t), None)
+                    }
+                }
+            })
+            .await?;
+        Ok(Response::new(response))
+    }
+}
