@@ -91,12 +91,19 @@ fn num(report: &Report, key: &str) -> f64 {
     report.get(key).and_then(Value::as_f64).unwrap_or(f64::NAN)
 }
 
-fn text(report: &Report, key: &str) -> String {
-    match report.get(key) {
-        Some(Value::String(s)) => s.clone(),
-        Some(Value::Null) | None => "-".into(),
-        Some(v) => v.to_string(),
+/// A value for people: strings without quotes, floats with 6 significant digits.
+fn shown(value: &Value) -> String {
+    match value {
+        Value::String(s) => s.clone(),
+        Value::Null => "-".into(),
+        Value::Number(n) if n.is_f64() => sig(n.as_f64().unwrap_or(f64::NAN)),
+        Value::Array(items) => items.iter().map(shown).collect::<Vec<_>>().join(" "),
+        other => other.to_string(),
     }
+}
+
+fn text(report: &Report, key: &str) -> String {
+    report.get(key).map_or_else(|| "-".into(), shown)
 }
 
 fn print_json(report: &Report) -> Result<()> {

@@ -306,4 +306,112 @@ mod tests {
         assert!(folds > 100, "the cases include folds ({folds})");
         assert!(ruled_out > 8000, "the cone rules out most harmless cases ({ruled_out} of 16000)");
     }
+
+    // Drawn cases of the rules, each with the one outcome it must have.
+
+    use crate::mesh::Mesh;
+    use crate::simplify::SimplifyOptions;
+
+    /// A hexagonal wheel: centre 0, inner ring 1..=6 at radius 1, outer ring 7..=12 at radius 2
+    /// (the border). The centre and the inner ring are interior vertices; every far edge of the
+    /// centre's fan has a face across it.
+    fn wheel() -> Mesh {
+        let ring = |r: f32, k: u32| {
+            let a = (k as f32) * std::f32::consts::FRAC_PI_3;
+            [r * a.cos(), r * a.sin(), 0.0]
+        };
+        let mut positions = vec![[0.0, 0.0, 0.0]];
+        positions.extend((0..6).map(|k| ring(1.0, k)));
+        positions.extend((0..6).map(|k| ring(2.0, k)));
+        let (inner, outer) = (|k: u32| 1 + k % 6, |k: u32| 7 + k % 6);
+        let mut triangles = Vec::new();
+        for k in 0..6 {
+            triangles.push([0, inner(k), inner(k + 1)]);
+            triangles.push([inner(k), outer(k), outer(k + 1)]);
+            triangles.push([inner(k), outer(k + 1), inner(k + 1)]);
+        }
+        Mesh::new(positions, triangles).unwrap()
+    }
+
+    fn check(mesh: &Mesh, options: &SimplifyOptions, survivor: u32, removed: u32, p: [f32; 3]) -> Result<(), Refusal> {
+        let (mut state, _) = State::new(mesh, options);
+        let candidate = Candidate { cost: 0.0, survivor, removed, position: p };
+        state.is_legal(&candidate).map(|_| ())
+    }
+
+    fn on_inner_edge_3_4(scale: f32) -> [f32; 3] {
+        // The midpoint of the centre's far edge (3, 4), scaled from the centre.
+        let (a, b) = (4.0 * std::f32::consts::FRAC_PI_3, 3.0 * std::f32::consts::FRAC_PI_3);
+        [scale * 0.5 * (a.cos() + b.cos()), scale * 0.5 * (a.sin() + b.sin()), 0.0]
+    }
+
+    #[test]
+    fn a_plain_collapse_is_legal() {
+        // The midpoint of the edge: every moved face keeps its side and its shape.
+        assert_eq!(check(&wheel(), &SimplifyOptions::default(), 0, 1, [0.5, 0.0, 0.0]), Ok(()));
+    }
+
+    #[test]
+    fn a_tetrahedron_cannot_lose_a_vertex() {
+        // Rule 3: the link condition holds (the common neighbours are the two opposite
+        // vertices), but the merged vertex would keep 2 faces: the solid would flatten.
+        let tetrahedron = Mesh::new(
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+        )
+        .unwrap();
+        let options = SimplifyOptions::default();
+        for (a, b) in [(0, 1), (1, 2), (2, 3), (3, 0)] {
+            assert_eq!(check(&tetrahedron, &options, a, b, [0.2, 0.2, 0.2]), Err(Refusal::TooFewFaces));
+        }
+    }
+
+    #[test]
+    fn a_torus_of_three_by_three_breaks_the_link_condition_everywhere() {
+        // Nine vertices of six neighbours each: the ends of every edge share more than the two
+        // vertices opposite it, so every collapse would pinch the surface.
+        let torus = crate::procedural::torus(3, 3, 0.3);
+        let options = SimplifyOptions::default();
+        let (state, edges) = State::new(&torus, &options);
+        drop(state);
+        assert_eq!(edges.len(), 27);
+        for [a, b] in edges {
+            let p = torus.positions[a as usize];
+            assert_eq!(check(&torus, &options, a, b, p), Err(Refusal::Link), "edge {a}–{b}");
+        }
+    }
+
+    #[test]
+    fn a_point_on_a_far_edge_makes_a_needle() {
+        // Rule 5: the centre moved onto its far edge (3, 4): that face has no area left.
+        assert_eq!(check(&wheel(), &SimplifyOptions::default(), 0, 1, on_inner_edge_3_4(1.0)), Err(Refusal::Needle));
+        // Vertex 1 merged at the centre: its face (1, 8, 2) becomes (0, 8, 2), three points on
+        // the ray through 2 and 8.
+        assert_eq!(check(&wheel(), &SimplifyOptions::default(), 0, 1, [0.0, 0.0, 0.0]), Err(Refusal::Needle));
+    }
+
+    #[test]
+    fn a_point_past_a_far_edge_flips_or_folds() {
+        // Past the far edge (3, 4) the face turns over. Rule 4 refuses the flip; with the normal
+        // change allowed up to 180°, rule 6 refuses it as a fold onto the face across the edge.
+        let p = on_inner_edge_3_4(1.6);
+        assert_eq!(check(&wheel(), &SimplifyOptions::default(), 0, 1, p), Err(Refusal::NormalChange));
+        let lenient = SimplifyOptions { max_normal_change_degrees: 180.0, ..Default::default() };
+        assert_eq!(check(&wheel(), &lenient, 0, 1, p), Err(Refusal::Fold));
+    }
+
+    #[test]
+    fn a_fin_freezes_its_edge() {
+        // Rule 1: a third face on an edge (a fin) makes the edge's ends frozen: no candidate.
+        let mut mesh = wheel();
+        let tip = mesh.positions.len() as u32;
+        mesh.positions.push([0.5, 0.3, 1.0]);
+        mesh.triangles.push([0, 1, tip]);
+        let options = SimplifyOptions::default();
+        let (state, _) = State::new(&mesh, &options);
+        assert_eq!(state.kind(0), VertexKind::Frozen);
+        assert_eq!(state.kind(1), VertexKind::Frozen);
+        assert!(state.evaluate(0, 1).is_none() && state.evaluate(0, 2).is_none() && state.evaluate(1, 7).is_none());
+        assert!(state.evaluate(2, 3).is_some(), "the rest of the wheel still simplifies");
+    }
 }

@@ -1,0 +1,280 @@
+//! Every flag that says it works, working: the client against a real `meshlod serve` (same
+//! flags, same report keys as the local commands), options checked before the work, options
+//! without effect said, the batch manifest's rules, and output for people.
+
+use std::collections::BTreeSet;
+use std::net::TcpListener;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+fn meshlod(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_meshlod")).args(args).output().expect("meshlod runs")
+}
+
+fn ok(args: &[&str]) -> Output {
+    let out = meshlod(args);
+    assert!(out.status.success(), "{args:?} failed: {}", String::from_utf8_lossy(&out.stderr));
+    out
+}
+
+fn ok_json(args: &[&str]) -> Value {
+    let out = ok(args);
+    serde_json::from_slice(&out.stdout)
+        .unwrap_or_else(|e| panic!("{args:?}: bad JSON ({e}): {}", String::from_utf8_lossy(&out.stdout)))
+}
+
+fn fails_with(args: &[&str], needle: &str) -> String {
+    let out = meshlod(args);
+    assert!(!out.status.success(), "{args:?} should fail");
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(stderr.contains(needle), "{args:?}: stderr '{stderr}' lacks '{needle}'");
+    stderr
+}
+
+fn tempdir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("meshlod-flags-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn keys(v: &Value) -> BTreeSet<String> {
+    v.as_object().expect("a JSON object").keys().cloned().collect()
+}
+
+/// `meshlod serve` on a free loopback port, stopped when dropped.
+struct Server {
+    child: Child,
+    address: String,
+}
+
+impl Server {
+    fn start() -> Server {
+        let port = TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+        let address = format!("127.0.0.1:{port}");
+        let child = Command::new(env!("CARGO_BIN_EXE_meshlod"))
+            .args(["serve", "--listen", &address, "--metrics-listen", ""])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("server starts");
+        let server = Server { child, address };
+        // `meshlod health` with a bare host:port, as the deploy files use it.
+        let started = Instant::now();
+        while !meshlod(&["health", "--server", &server.address, "--timeout", "2"]).status.success() {
+            assert!(started.elapsed() < Duration::from_secs(60), "the server did not become healthy");
+            std::thread::sleep(Duration::from_millis(100));
+        }
+        server
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+#[test]
+fn client_honours_every_flag_and_reports_as_local_does() {
+    let dir = tempdir("client");
+    let input = dir.join("blob.obj");
+    ok(&["generate", "blob", "-o", s(&input), "--resolution", "24"]);
+    let server = Server::start();
+    let client = |args: &[&str]| {
+        let mut all = vec!["client", "--server", server.address.as_str()];
+        all.extend_from_slice(args);
+        ok_json(&all)
+    };
+    // Simplify: the same flags here and there, the same keys, the same result; --pm is written.
+    let (local_pm, remote_pm) = (dir.join("local.pm"), dir.join("remote.pm"));
+    let (local_out, remote_out) = (dir.join("local.ply"), dir.join("remote.ply"));
+    let flags = ["--ratio", "0.9", "--hausdorff", "--json"];
+    let mut args = vec!["simplify", s(&input), "-o", s(&local_out), "--pm", s(&local_pm)];
+    args.extend_from_slice(&flags);
+    let local = ok_json(&args);
+    let mut args = vec!["simplify", s(&input), "-o", s(&remote_out), "--pm", s(&remote_pm)];
+    args.extend_from_slice(&flags);
+    let remote = client(&args);
+    assert_eq!(keys(&local), keys(&remote), "local and client simplify reports");
+    for key in ["faces_out", "vertices_out", "collapses", "w_source", "pm_bytes", "pm_splits", "hausdorff_paper"] {
+        assert_eq!(local[key], remote[key], "{key}");
+    }
+    assert_eq!(std::fs::read(&local_pm).unwrap(), std::fs::read(&remote_pm).unwrap(), "the same .pm bytes");
+    let full = dir.join("full.obj");
+    ok(&["lod", s(&remote_pm), "--faces", &local["faces_in"].to_string(), "-o", s(&full)]);
+    // Refine with --reference: measured on the client against the reference.
+    let r_local =
+        ok_json(&["refine", s(&input), "-o", s(&dir.join("a.obj")), "--etc", "1", "--reference", s(&input), "--json"]);
+    let r_remote =
+        client(&["refine", s(&input), "-o", s(&dir.join("b.obj")), "--etc", "1", "--reference", s(&input), "--json"]);
+    assert_eq!(keys(&r_local), keys(&r_remote), "local and client refine reports");
+    assert!(r_remote.get("reference_hausdorff_paper").is_some());
+    assert_eq!(r_local["faces_out"], r_remote["faces_out"]);
+    // Predict: --json accepted by the client, the same report.
+    let p_local = ok_json(&["predict", s(&input), "--ratio", "0.9", "--json"]);
+    let p_remote = client(&["predict", s(&input), "--ratio", "0.9", "--json"]);
+    assert_eq!(p_local, p_remote);
+    // Text output, and errors that name the field and the flag.
+    let text = ok(&["client", "--server", &server.address, "simplify", s(&input), "-o", s(&dir.join("t.ply"))]);
+    assert!(String::from_utf8_lossy(&text.stdout).contains("faces"));
+    fails_with(
+        &["client", "--server", &server.address, "simplify", s(&input), "-o", s(&dir.join("t.ply")), "--ratio", "2"],
+        "target_ratio",
+    );
+    // A URL works as well as host:port; a closed port is reported, not hung on.
+    let url = format!("http://{}", server.address);
+    ok(&["client", "--server", &url, "predict", s(&input), "--faces", "100"]);
+    drop(server);
+    fails_with(&["health", "--server", "127.0.0.1:1", "--timeout", "2"], "127.0.0.1:1");
+}
+
+#[test]
+fn outputs_are_checked_before_any_work() {
+    let dir = tempdir("outputs");
+    // The input does not even exist: the output's error comes first, so no work was done.
+    let missing = dir.join("missing.obj");
+    fails_with(&["simplify", s(&missing), "-o", s(&dir.join("out.stl"))], "output extension");
+    fails_with(&["simplify", s(&missing), "-o", s(&dir.join("no/such/dir/out.ply"))], "folder does not exist");
+    fails_with(&["simplify", s(&missing), "-o", s(&dir.join("o.ply")), "--pm", s(&dir.join("no/x.pm"))], "x.pm");
+    fails_with(&["refine", s(&missing), "-o", s(&dir.join("out.stl")), "--etc", "1"], "output extension");
+    fails_with(&["convert", s(&missing), s(&dir.join("out.stl"))], "output extension");
+    fails_with(&["generate", "sphere", "-o", s(&dir.join("s.stl"))], "output extension");
+    // Options are checked before the mesh is read as well.
+    let input = dir.join("t.obj");
+    ok(&["generate", "torus", "-o", s(&input), "--resolution", "8"]);
+    fails_with(&["simplify", s(&input), "-o", s(&dir.join("o.ply")), "--max-normal-change", "0"], "max_normal_change");
+    fails_with(&["lod", s(&missing), "-o", s(&dir.join("l.ply")), "--max-error", "nan"], "--max-error");
+}
+
+#[test]
+fn options_without_effect_are_said() {
+    let dir = tempdir("warnings");
+    let input = dir.join("t.obj");
+    ok(&["generate", "torus", "-o", s(&input), "--resolution", "12"]);
+    let out = dir.join("o.ply");
+    let run = ok(&["simplify", s(&input), "-o", s(&out), "--metric", "qem", "--w", "1", "--json"]);
+    let report: Value = serde_json::from_slice(&run.stdout).unwrap();
+    assert!(String::from_utf8_lossy(&run.stderr).contains("warning: w has no effect"), "{run:?}");
+    assert_eq!(report["warnings"].as_array().unwrap().len(), 1);
+    let run = ok(&["simplify", s(&input), "-o", s(&out), "--normals", "recompute"]);
+    assert!(String::from_utf8_lossy(&run.stderr).contains("no effect at w = 0"));
+    let quiet = ok(&["simplify", s(&input), "-o", s(&out), "--w", "1", "--normals", "recompute"]);
+    assert!(!String::from_utf8_lossy(&quiet.stderr).contains("warning"), "{quiet:?}");
+    // A level below the base mesh: the base, said.
+    let pm = dir.join("t.pm");
+    ok(&["simplify", s(&input), "-o", s(&out), "--ratio", "0.9", "--pm", s(&pm)]);
+    let lod = ok(&["lod", s(&pm), "--faces", "1", "-o", s(&dir.join("l.obj"))]);
+    assert!(String::from_utf8_lossy(&lod.stderr).contains("below the coarsest level"));
+}
+
+#[test]
+fn output_is_for_people_and_generate_stays_small() {
+    let dir = tempdir("people");
+    for shape in ["sphere", "torus", "box", "terrain", "blob"] {
+        let path = dir.join(format!("{shape}.ply"));
+        ok(&["generate", shape, "-o", s(&path)]);
+        let info = ok_json(&["info", s(&path), "--json"]);
+        let faces = info["faces"].as_u64().unwrap();
+        assert!(faces > 1000 && faces < 1_000_000, "{shape}: {faces} faces by default");
+    }
+    fails_with(&["generate", "sphere", "-o", s(&dir.join("big.ply")), "--resolution", "10"], "at most 9");
+    // Text: counts first, in the report's order; no debug quotes; at most 6 significant digits.
+    let info = ok(&["info", s(&dir.join("torus.ply"))]);
+    let text = String::from_utf8_lossy(&info.stdout);
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(lines[1].trim_start().starts_with("vertices") && lines[2].trim_start().starts_with("faces"), "{text}");
+    let out = ok(&["simplify", s(&dir.join("torus.ply")), "-o", s(&dir.join("o.obj")), "--hausdorff"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(!text.contains('"'), "{text}");
+    let long = text
+        .split(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .filter(|t| t.contains('.'))
+        .map(|t| t.chars().filter(char::is_ascii_digit).collect::<String>().trim_start_matches('0').len())
+        .max()
+        .unwrap_or(0);
+    assert!(long <= 6, "a number with {long} significant digits in: {text}");
+    // The Hausdorff report names its units in every distance key.
+    let d = ok_json(&["hausdorff", s(&dir.join("torus.ply")), s(&dir.join("o.obj")), "--json"]);
+    for key in keys(&d) {
+        let distance = ["hausdorff", "mean", "rms"].iter().any(|k| key.starts_with(k)) && key != "hausdorff_tolerance";
+        if distance {
+            assert!(
+                key.ends_with("_paper") || key.ends_with("_absolute") || key.ends_with("_diag_pct"),
+                "{key} names no unit"
+            );
+        }
+    }
+}
+
+#[test]
+fn batch_manifest_rules() {
+    let dir = tempdir("batch");
+    let input = dir.join("torus.obj");
+    ok(&["generate", "torus", "-o", s(&input), "--resolution", "12"]);
+    let manifest = dir.join("jobs.jsonl");
+    let results = dir.join("results.jsonl");
+    let batch = |extra: &[&str]| {
+        let mut args = vec!["batch", s(&manifest), "--results", s(&results), "--quiet"];
+        args.extend_from_slice(extra);
+        let out = meshlod(&args);
+        let text = std::fs::read_to_string(&results).unwrap_or_default();
+        (out, text.lines().map(|l| serde_json::from_str::<Value>(l).unwrap()).collect::<Vec<_>>())
+    };
+    // Unknown keys are refused before anything runs (a "ratio" key would otherwise be ignored).
+    std::fs::write(
+        &manifest,
+        "{\"op\": \"simplify\", \"input\": \"torus.obj\", \"output\": \"a.ply\", \"ratio\": 0.9}\n",
+    )
+    .unwrap();
+    let (out, _) = batch(&[]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("unknown field `ratio`"), "{out:?}");
+    assert!(!dir.join("a.ply").exists());
+    // Paths in args are relative to the manifest, like input and output.
+    std::fs::write(
+        &manifest,
+        "{\"op\": \"simplify\", \"input\": \"torus.obj\", \"output\": \"out/a.ply\", \"args\": [\"--ratio\", \"0.9\", \"--pm\", \"out/a.pm\"]}\n",
+    )
+    .unwrap();
+    let (out, records) = batch(&[]);
+    assert!(out.status.success(), "{out:?}");
+    assert!(dir.join("out/a.pm").is_file(), "{records:?}");
+    assert_eq!(records[0]["report"]["faces_out"], records[0]["report"]["target_faces"]);
+    // A job that fails after writing its mesh (the reference is missing) leaves nothing behind,
+    // so a rerun runs it again instead of skipping it; the batch fails both times.
+    std::fs::write(
+        &manifest,
+        "{\"op\": \"refine\", \"input\": \"torus.obj\", \"output\": \"fine.obj\", \"args\": [\"--etc\", \"1\", \"--reference\", \"gone.obj\"]}\n",
+    )
+    .unwrap();
+    for _ in 0..2 {
+        let (out, records) = batch(&[]);
+        assert!(!out.status.success());
+        assert_eq!(records[0]["status"], "error", "{records:?}");
+        assert!(!dir.join("fine.obj").exists());
+    }
+    // Shards: each index runs every count-th job, together all of them once.
+    let lines: String = (0..5)
+        .map(|i| format!("{{\"op\": \"simplify\", \"input\": \"torus.obj\", \"output\": \"s/{i}.ply\"}}\n"))
+        .collect();
+    std::fs::write(&manifest, lines).unwrap();
+    let (_, first) = batch(&["--shard-index", "0", "--shard-count", "2"]);
+    let (_, second) = batch(&["--shard-index", "1", "--shard-count", "2"]);
+    let lines_of = |r: &[Value]| r.iter().map(|x| x["line"].as_u64().unwrap()).collect::<BTreeSet<_>>();
+    assert_eq!(lines_of(&first), BTreeSet::from([1, 3, 5]));
+    assert_eq!(lines_of(&second), BTreeSet::from([2, 4]));
+    let (out, _) = batch(&["--shard-index", "2", "--shard-count", "2"]);
+    assert!(!out.status.success());
+    // The manifest format is in --help.
+    let help = ok(&["batch", "--help"]);
+    assert!(String::from_utf8_lossy(&help.stdout).contains("Any other key is an error"));
+}
