@@ -2,86 +2,12 @@
 //! flags, same report keys as the local commands), options checked before the work, options
 //! without effect said, the batch manifest's rules, and output for people.
 
+mod common;
+
 use std::collections::BTreeSet;
-use std::net::TcpListener;
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
-use std::time::{Duration, Instant};
 
+use common::{Server, fails_with, keys, meshlod, ok, ok_json, s, tempdir};
 use serde_json::Value;
-
-fn meshlod(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_meshlod")).args(args).output().expect("meshlod runs")
-}
-
-fn ok(args: &[&str]) -> Output {
-    let out = meshlod(args);
-    assert!(out.status.success(), "{args:?} failed: {}", String::from_utf8_lossy(&out.stderr));
-    out
-}
-
-fn ok_json(args: &[&str]) -> Value {
-    let out = ok(args);
-    serde_json::from_slice(&out.stdout)
-        .unwrap_or_else(|e| panic!("{args:?}: bad JSON ({e}): {}", String::from_utf8_lossy(&out.stdout)))
-}
-
-fn fails_with(args: &[&str], needle: &str) -> String {
-    let out = meshlod(args);
-    assert!(!out.status.success(), "{args:?} should fail");
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(stderr.contains(needle), "{args:?}: stderr '{stderr}' lacks '{needle}'");
-    stderr
-}
-
-fn tempdir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("meshlod-flags-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-fn keys(v: &Value) -> BTreeSet<String> {
-    v.as_object().expect("a JSON object").keys().cloned().collect()
-}
-
-/// `meshlod serve` on a free loopback port, stopped when dropped.
-struct Server {
-    child: Child,
-    address: String,
-}
-
-impl Server {
-    fn start() -> Server {
-        let port = TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
-        let address = format!("127.0.0.1:{port}");
-        let child = Command::new(env!("CARGO_BIN_EXE_meshlod"))
-            .args(["serve", "--listen", &address, "--metrics-listen", ""])
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("server starts");
-        let server = Server { child, address };
-        // `meshlod health` with a bare host:port, as the deploy files use it.
-        let started = Instant::now();
-        while !meshlod(&["health", "--server", &server.address, "--timeout", "2"]).status.success() {
-            assert!(started.elapsed() < Duration::from_secs(60), "the server did not become healthy");
-            std::thread::sleep(Duration::from_millis(100));
-        }
-        server
-    }
-}
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
 
 #[test]
 fn client_honours_every_flag_and_reports_as_local_does() {

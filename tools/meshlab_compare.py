@@ -22,7 +22,7 @@ import pymeshlab
 
 def hausdorff(meshlod, a, b):
     out = subprocess.run([meshlod, "hausdorff", a, b, "--json"], check=True, capture_output=True, text=True)
-    return json.loads(out.stdout)["hausdorff"]
+    return json.loads(out.stdout)["hausdorff_paper"]
 
 
 def main():

@@ -91,9 +91,9 @@ def main():
                                       "--json"], check=True, capture_output=True, text=True)
                 ours = json.loads(out.stdout)
                 # Absolute units, as Metro's.
-                scale = ours["hausdorff_absolute"] / ours["hausdorff"] if ours["hausdorff"] > 0 else 0.0
+                scale = ours["hausdorff_absolute"] / ours["hausdorff_paper"] if ours["hausdorff_paper"] > 0 else 0.0
                 upper, lower = ours["hausdorff_absolute"], ours["hausdorff_lower_absolute"]
-                our_mean = max(ours["a_to_b"]["mean"], ours["b_to_a"]["mean"]) * scale
+                our_mean = max(ours["a_to_b"]["mean_paper"], ours["b_to_a"]["mean_paper"]) * scale
                 gap = (upper - lower) / lower if lower > 0 else 0.0
                 d_mean = our_mean / metro_mean - 1.0 if metro_mean > 0 else 0.0
                 # Metro measures in float: its distances can exceed the true ones by its rounding.
