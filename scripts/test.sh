@@ -36,6 +36,10 @@ port=$(.venv/bin/python -c 'import socket; s = socket.socket(); s.bind(("127.0.0
 server=$!
 trap 'kill $server 2>/dev/null || true' EXIT
 .venv/bin/python examples/python/client.py --server "127.0.0.1:$port"
+"$MESHLOD" generate torus -o "$(dirname "$MESHLOD")/example-torus.ply" --resolution 24
+.venv/bin/python examples/python/client.py --server "127.0.0.1:$port" \
+  --mesh "$(dirname "$MESHLOD")/example-torus.ply" --out "$(dirname "$MESHLOD")/example-torus-10.obj"
+"$MESHLOD" info "$(dirname "$MESHLOD")/example-torus-10.obj" --json > /dev/null
 kill -TERM "$server"
 wait "$server"
 trap - EXIT

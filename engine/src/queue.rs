@@ -48,9 +48,9 @@ impl QueueEntry {
 ///
 /// An error that vanishes in `f32` (zero, or below its normal range: an exactly planar
 /// neighbourhood) would tie every such candidate; they go shortest edge first instead, the length's
-/// bits scaled into the subnormal range below every normal error. On fandisk's planar regions this
-/// order refuses about 0.07× as many candidates as the ties' order in the heap did (shorter edges
-/// make fewer needles), and it does not depend on how the queue is laid out.
+/// bits scaled into the subnormal range below every normal error. On planar regions this order
+/// refuses far fewer candidates than the ties' order in the heap did (shorter edges make fewer
+/// needles; docs/history/benchmarks-log.md, session 15), and it does not depend on how the queue is laid out.
 #[inline]
 pub(crate) fn order_key(cost: f64, error: f64, length2: f64) -> u32 {
     let bits = |x: f64| if x.is_nan() { f32::INFINITY.to_bits() } else { (x.max(0.0) as f32).to_bits() };
@@ -185,9 +185,8 @@ impl CollapseQueue {
 /// lowest-ranked ~1/[`REFILL_SHARE`] of the rest into the heap (the threshold read at that share of
 /// an evenly spaced sample). The pops come in the order of a single heap over every entry: each
 /// entry of the array ranks above each entry of the heap. Against one heap of every entry, with a
-/// sweep and a rebuild whenever a quarter of it was stale (docs/benchmarks.md, session 15): 0.85×
-/// the time on ogre, 0.92× on stanford-bunny, with fewer instructions (769 M against 785 M on
-/// ogre) but fewer cache misses above all. A share of 8, 32, 64 or 128 did no better.
+/// sweep and a rebuild whenever a quarter of it was stale, it took less time, through fewer cache
+/// misses above all; other shares did no better (docs/history/benchmarks-log.md, session 15).
 #[derive(Debug, Default)]
 pub(crate) struct TieredQueue {
     hot: CollapseQueue,

@@ -32,8 +32,8 @@ use sampling::{SampleKinds, directed_sampled, sample_surface};
 #[derive(Debug, Clone)]
 pub struct HausdorffOptions {
     /// Face samples per direction for the mean and RMS. `None`: half the larger vertex count of
-    /// the two meshes, at least [`HausdorffOptions::MIN_DEFAULT_SAMPLES`] (a standard error of
-    /// about 1% of the mean on the shared meshes; more for a finer estimate).
+    /// the two meshes, at least [`HausdorffOptions::MIN_DEFAULT_SAMPLES`] (checked against MeshLab's
+    /// dense Metro sampling in docs/metro-check.txt; more for a finer estimate).
     pub samples: Option<usize>,
     /// Relative gap allowed between the bounds: the search stops when U ≤ L · (1 + tolerance).
     pub tolerance: f64,

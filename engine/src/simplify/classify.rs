@@ -103,8 +103,8 @@ pub(super) fn scan_fans(fans: &[FanSlot]) -> Scan {
 /// touching at the vertex), and the neighbours are the `next` corners. `None` when the fan is not
 /// closed in this way (a boundary, a non-manifold edge): [`scan_small_fan`] sorts those out.
 ///
-/// Every slot is compared with every other (fixed bounds, no branch on the data): on
-/// stanford-bunny this takes about a quarter of the instructions of the general count.
+/// Every slot is compared with every other (fixed bounds, no branch on the data): a fraction of the
+/// instructions of the general count (docs/history/benchmarks-log.md).
 fn scan_closed_fan(v: u32, slots: &[Corner; FAN_INLINE], n: usize, scan: &mut Scan) -> Option<VertexKind> {
     const N: usize = FAN_INLINE;
     if n < 2 {
@@ -196,7 +196,7 @@ fn sort8(values: &mut [u32; 8]) {
 /// against all corners at once, without a branch on the data: the edge (v, u) is manifold when
 /// exactly one face runs v → u and at most one u → v; it is a boundary edge when it has one face.
 /// Sorting the corner ends instead, as [`scan_large_fan`] does, mispredicts about a branch per
-/// comparison: on stanford-bunny the whole scan takes 2.6 ms this way and took 5.0 ms by sorting.
+/// comparison and took about twice the time (docs/history/benchmarks-log.md).
 /// Out of line, so that there is one copy of the vectorised count loop.
 #[inline(never)]
 fn scan_small_fan(v: u32, fan: &[Corner], scan: &mut Scan) -> VertexKind {

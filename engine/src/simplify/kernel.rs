@@ -55,10 +55,8 @@ pub(crate) struct State<'o> {
 
 /// What ranking an edge reads of each endpoint, in one 128-byte block (two adjacent cache lines)
 /// rather than a line or two in each of four arrays. The cost is evaluated about twelve times per
-/// collapse, mostly with a neighbour whose data is not in cache. On stanford-bunny (whose vertex
-/// order is far from its surface order) this took cost evaluation's simulated L2 misses from 904 k to
-/// 392 k and the run's time down by 10–20%; on meshes stored in surface order it gains less
-/// (docs/benchmarks.md).
+/// collapse, mostly with a neighbour whose data is not in cache: one block halves the misses where
+/// the vertex order is far from the surface order (measured in docs/history/benchmarks-log.md).
 #[derive(Debug, Clone, Copy, Default)]
 #[repr(C, align(64))]
 pub(super) struct VertexData {
@@ -174,8 +172,8 @@ impl<'o> State<'o> {
             let usable = triangle_quality(2.0 * area, pa, pb, pc) >= CONE_MIN_QUALITY;
             face_units.push(if usable { unit } else { DVec3::NAN });
             // `n.normalize()` rather than `unit` (equal up to the last bit): the collapse order,
-            // and so the documented figures, follow these exact bits — bunny at 90% moves from
-            // 0.006502 to 0.007331 with `unit` (see docs/simplify-report.md, sensitivity).
+            // and so the documented figures, follow these exact bits (docs/simplify-report.md,
+            // sensitivity; engine/tests/digest.rs holds them).
             let q = Quadric::from_plane(n.normalize(), pa, area);
             for &v in t {
                 let vertex = &mut state.vertices[v as usize];
@@ -275,7 +273,7 @@ impl<'o> State<'o> {
     /// Asks the cache, all at once, for what the checks, the collapse of (a, b) and the re-ranking
     /// of its edges will read of the ring around the edge: each neighbour's block (both lines) and
     /// fan. The misses then overlap instead of following one another through the data-dependent
-    /// branches of the checks (real loads did this too, 3–7% less well: they stall the core).
+    /// branches of the checks (real loads did this too, less well: they stall the core; docs/history/benchmarks-log.md).
     #[inline]
     pub(super) fn prefetch_ring(&self, a: u32, b: u32) {
         // Not a nor b (each is a `next` around the other: their data is in cache already). A

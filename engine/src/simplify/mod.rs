@@ -27,8 +27,8 @@
 //! themselves by quadric error, so flat regions are simplified in the order plain QEM would use;
 //! positive costs follow in cost order (`crate::queue::order_key`, costs kept as `f32`). Where the
 //! quadric error itself vanishes (an exactly planar neighbourhood: zero, or too small for an `f32`)
-//! the shorter edge goes first, which keeps the triangles of planar regions well shaped: on fandisk
-//! it refuses 0.07× as many candidates as leaving them tied did, and runs in 0.4× the time.
+//! the shorter edge goes first, which keeps the triangles of planar regions well shaped and refuses
+//! far fewer candidates there than leaving them tied did (docs/history/benchmarks-log.md, session 15).
 //! Remaining ties go to the lower first vertex id, then to the queue's layout, which the sequence
 //! of pushes, pops, refills and sweeps fixes (not push order: a heap is not stable): a run is
 //! deterministic, which the progressive mesh's `at_faces` relies on, but a change to the queue
@@ -74,8 +74,8 @@
 //!    faces that share an edge turn back onto each other (normals' dot product below [`FOLD_DOT`]).
 //!    The face across is looked at only when the normal cones of the far edge's two ends
 //!    (`NormalCone`: how far the faces around a vertex stray from its normal) leave a fold
-//!    possible (one moved face in 600 to 10 000 on bunny, nefertiti and fandisk); debug builds check
-//!    every skipped one anyway.
+//!    possible (rarely: counts in docs/history/benchmarks-log.md); debug builds check every skipped one
+//!    anyway.
 
 mod classify;
 mod cost;

@@ -108,7 +108,7 @@ pub async fn serve_with_listener(
         let identity = tonic::transport::Identity::from_pem(std::fs::read(cert)?, std::fs::read(key)?);
         builder = builder.tls_config(tonic::transport::ServerTlsConfig::new().identity(identity))?;
     }
-    // No Nagle: small gRPC frames would otherwise wait for delayed ACKs (~40 ms per request).
+    // No Nagle: small gRPC frames would otherwise wait for delayed ACKs on every request.
     let incoming = tonic::transport::server::TcpIncoming::from(listener)
         .with_nodelay(Some(true))
         .with_keepalive(Some(std::time::Duration::from_secs(60)));
