@@ -399,13 +399,26 @@ fn long_request() -> proto::SimplifyRequest {
     simplify_request(&procedural::bumpy_blob(700, 1400, 1), 0.99)
 }
 
-fn in_flight(metrics: SocketAddr) -> i64 {
+fn scrape(metrics: SocketAddr) -> String {
     use std::io::{Read, Write};
     let mut s = std::net::TcpStream::connect(metrics).unwrap();
     s.write_all(b"GET /metrics HTTP/1.1\r\nhost: x\r\n\r\n").unwrap();
     let mut text = String::new();
     s.read_to_string(&mut text).unwrap();
-    text.lines().find_map(|l| l.strip_prefix("meshlod_in_flight ")).unwrap().trim().parse().unwrap()
+    text
+}
+
+fn gauge(metrics: SocketAddr, name: &str) -> i64 {
+    scrape(metrics).lines().find_map(|l| l.strip_prefix(&format!("{name} "))).unwrap().trim().parse().unwrap()
+}
+
+fn in_flight(metrics: SocketAddr) -> i64 {
+    gauge(metrics, "meshlod_in_flight")
+}
+
+fn requests(metrics: SocketAddr, method: &str, code: &str) -> u64 {
+    let key = format!("meshlod_requests_total{{method=\"{method}\",code=\"{code}\"}} ");
+    scrape(metrics).lines().find_map(|l| l.strip_prefix(&key)).map_or(0, |n| n.trim().parse().unwrap())
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -431,6 +444,23 @@ async fn busy_server_refuses_and_cancelled_work_stops() {
     let mut second = server.client().await;
     let refused = second.simplify(simplify_request(&procedural::icosphere(2), 0.5)).await.unwrap_err();
     assert_eq!(refused.code(), Code::ResourceExhausted, "{refused:?}");
+    // An upload is admitted before it is buffered: with no slot and no queue place it is refused
+    // after its first chunk, while its stream is still open (it used to be read to its end first).
+    let (tx, rx) = tokio::sync::mpsc::channel::<proto::MeshChunk>(1);
+    tx.send(proto::MeshChunk { options: None, positions: vec![0.0; 3 * 1024], indices: vec![0; 3 * 1024] })
+        .await
+        .unwrap();
+    let mut third = server.client().await;
+    let upload = tokio::time::timeout(
+        Duration::from_secs(5),
+        third.simplify_upload(tokio_stream::wrappers::ReceiverStream::new(rx)),
+    )
+    .await
+    .expect("refused without waiting for the stream to end")
+    .unwrap_err();
+    assert_eq!(upload.code(), Code::ResourceExhausted, "{upload:?}");
+    assert_eq!(gauge(metrics, "meshlod_queue_depth"), 0);
+    drop(tx);
     // The deadline passes: the call fails and the server's worker stops instead of finishing.
     let result = running.await.unwrap();
     let code = result.unwrap_err().code();
@@ -442,6 +472,86 @@ async fn busy_server_refuses_and_cancelled_work_stops() {
     }
     // The slot is free again.
     assert!(second.simplify(simplify_request(&procedural::icosphere(2), 0.5)).await.is_ok());
+    // Every outcome is counted under its code: the expired call too (it used to be left out).
+    assert_eq!(requests(metrics, "Simplify", "DeadlineExceeded"), 1, "{}", scrape(metrics));
+    assert_eq!(requests(metrics, "Simplify", "ResourceExhausted"), 1);
+    assert_eq!(requests(metrics, "SimplifyUpload", "ResourceExhausted"), 1);
+    assert_eq!(requests(metrics, "Simplify", "Ok"), 1);
+    // A call the client cancels is counted as cancelled, and its slot freed.
+    let mut fourth = server.client().await;
+    let long = long_request();
+    let cancelled = tokio::spawn(async move { fourth.simplify(long).await });
+    let started = Instant::now();
+    while in_flight(metrics) == 0 {
+        assert!(started.elapsed() < Duration::from_secs(20), "long request never started");
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+    cancelled.abort();
+    let aborted_at = Instant::now();
+    while in_flight(metrics) != 0 || requests(metrics, "Simplify", "Cancelled") == 0 {
+        assert!(aborted_at.elapsed() < Duration::from_secs(5), "{}", scrape(metrics));
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    server.stop().await;
+}
+
+/// Sends raw bytes as a Simplify request body.
+#[derive(Clone, Default)]
+struct RawCodec;
+
+impl tonic::codec::Codec for RawCodec {
+    type Encode = Vec<u8>;
+    type Decode = Vec<u8>;
+    type Encoder = RawCodec;
+    type Decoder = RawCodec;
+    fn encoder(&mut self) -> RawCodec {
+        RawCodec
+    }
+    fn decoder(&mut self) -> RawCodec {
+        RawCodec
+    }
+}
+
+impl tonic::codec::Encoder for RawCodec {
+    type Item = Vec<u8>;
+    type Error = tonic::Status;
+    fn encode(&mut self, item: Vec<u8>, dst: &mut tonic::codec::EncodeBuf<'_>) -> Result<(), tonic::Status> {
+        use bytes::BufMut;
+        dst.put_slice(&item);
+        Ok(())
+    }
+}
+
+impl tonic::codec::Decoder for RawCodec {
+    type Item = Vec<u8>;
+    type Error = tonic::Status;
+    fn decode(&mut self, src: &mut tonic::codec::DecodeBuf<'_>) -> Result<Option<Vec<u8>>, tonic::Status> {
+        use bytes::Buf;
+        let mut out = vec![0; src.remaining()];
+        src.copy_to_slice(&mut out);
+        Ok(Some(out))
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn codec_errors_get_the_contracts_codes() {
+    let server = TestServer::start(ServerConfig { max_message_bytes: 64 << 10, ..Default::default() }).await;
+    let mut grpc = tonic::client::Grpc::new(channel(server.addr).await);
+    let path = http::uri::PathAndQuery::from_static("/meshlod.v1.MeshLod/Simplify");
+    // Not a protobuf message: a field tag of 0 and a truncated varint.
+    grpc.ready().await.unwrap();
+    let garbage = grpc.unary(tonic::Request::new(vec![0x00, 0xff, 0xff]), path.clone(), RawCodec).await.unwrap_err();
+    assert_eq!(garbage.code(), Code::InvalidArgument, "{garbage:?}");
+    // Over the message limit: RESOURCE_EXHAUSTED, not OUT_OF_RANGE.
+    let mut client = server.client().await;
+    let big = client.simplify(simplify_request(&procedural::icosphere(5), 0.5)).await.unwrap_err();
+    assert_eq!(big.code(), Code::ResourceExhausted, "{big:?}");
+    // The same for an upload whose chunk is over the limit.
+    let chunk = proto::MeshChunk { options: None, positions: vec![0.0; 3 * 20_000], indices: vec![0; 3 * 20_000] };
+    let big = client.simplify_upload(tokio_stream::iter(vec![chunk])).await.unwrap_err();
+    assert_eq!(big.code(), Code::ResourceExhausted, "{big:?}");
+    // Valid requests still work.
+    assert!(client.simplify(simplify_request(&procedural::icosphere(2), 0.5)).await.is_ok());
     server.stop().await;
 }
 

@@ -277,3 +277,31 @@ fn tempdir(name: &str) -> std::path::PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
+
+#[test]
+fn huge_polygons_are_triangulated_in_bounded_work_or_refused() {
+    // A 100 000-corner face (OBJ and binary PLY) becomes n − 2 triangles; one over the face limit
+    // is refused before it is triangulated, naming the line.
+    let n = 100_000usize;
+    let mut text = String::new();
+    for i in 0..n {
+        let a = std::f64::consts::TAU * i as f64 / n as f64;
+        text.push_str(&format!("v {} {} 0\n", a.cos(), a.sin()));
+    }
+    text.push_str("f");
+    for i in 0..n {
+        text.push_str(&format!(" {}", i + 1));
+    }
+    text.push('\n');
+    assert_eq!(obj(&text).unwrap().face_count(), n - 2);
+    let tight = ReadLimits { max_faces: 1000, ..ReadLimits::default() };
+    let refused = read_mesh_bytes(text.as_bytes(), Some(MeshFormat::Obj), Path::new("test.obj"), &tight);
+    assert!(matches!(refused, Err(MeshError::TooLarge { what: "faces", .. })), "{refused:?}");
+    // `f 1 2 3 1 2 3 …`: a polygon repeating its corners ends too (fanned: no area to clip).
+    let mut repeated = String::from("v 0 0 0\nv 1 0 0\nv 0 1 0\nf");
+    for i in 0..30_000 {
+        repeated.push_str(&format!(" {}", i % 3 + 1));
+    }
+    repeated.push('\n');
+    assert_eq!(obj(&repeated).unwrap().face_count(), 30_000 - 2);
+}

@@ -137,3 +137,51 @@ fn bad_input_is_refused_clearly() {
     };
     assert!(matches!(refine(&mesh, &cancelled), Err(MeshError::Cancelled)));
 }
+
+#[test]
+fn hostile_fans_and_outputs_are_refused_before_the_work() {
+    // 100 000 faces on one edge, and 100 000 copies of one triangle: quadratic for the energies and
+    // the collapses, refused up front naming the edge.
+    let n = 100_000u32;
+    let mut book = Mesh { positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]], ..Default::default() };
+    for i in 0..n {
+        book.positions.push([0.5, i as f32 * 1e-3, 1.0]);
+        book.triangles.push([0, 1, 2 + i]);
+    }
+    let copies = Mesh {
+        positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        triangles: vec![[0, 1, 2]; n as usize],
+        ..Default::default()
+    };
+    for (name, mesh) in [("book", &book), ("copies", &copies)] {
+        for mode in [RefineMode::Simplify, RefineMode::Subdivide, RefineMode::Both] {
+            let err = refine(mesh, &RefineOptions { mode, ..Default::default() }).unwrap_err();
+            let text = err.to_string();
+            assert!(
+                matches!(err, MeshError::InvalidParameter { name: "input", .. }) && text.contains("faces on one edge"),
+                "{name}: {text}"
+            );
+        }
+    }
+    // A fin (three faces on an edge) is still refined.
+    let mut fin = procedural::icosphere(2);
+    let tip = fin.positions.len() as u32;
+    fin.positions.push([0.0, 0.0, 3.0]);
+    let [a, b, _] = fin.triangles[0];
+    fin.triangles.push([a, b, tip]);
+    assert!(refine(&fin, &RefineOptions::default()).is_ok());
+    // The output's size is known before each round: ETC 0 at 4 rounds on 5 120 faces would make
+    // 1.3 M; with a limit of 500 000 the fourth round is refused before it is built.
+    let sphere = procedural::icosphere(4);
+    let options = RefineOptions { etc: Some(0.0), rounds: 4, max_faces: Some(500_000), ..Default::default() };
+    let err = refine(&sphere, &options).unwrap_err();
+    assert!(matches!(err, MeshError::TooLarge { count: 1_310_720, limit: 500_000, .. }), "{err}");
+    let ok = RefineOptions { rounds: 3, ..options.clone() };
+    assert_eq!(refine(&sphere, &ok).unwrap().mesh.face_count(), 327_680);
+    // A target above the limit is refused at once; one the search can reach under it is found.
+    let target = RefineOptions { etc: None, target_faces: Some(600_000), ..options.clone() };
+    assert!(matches!(refine(&sphere, &target).unwrap_err(), MeshError::TooLarge { .. }));
+    let target = RefineOptions { etc: None, target_faces: Some(50_000), rounds: 2, max_faces: Some(60_000), ..options };
+    let reached = refine(&sphere, &target).unwrap().mesh.face_count();
+    assert!(reached.abs_diff(50_000) <= 1_500, "{reached}");
+}

@@ -10,12 +10,12 @@
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
-use meshlod_engine::Mesh;
 use meshlod_engine::features::{SHAPE_FEATURE_NAMES, W_CLASSES, shape_features};
 use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
 use meshlod_engine::refine::{RefineMode, RefineOptions, Refined, refine as engine_refine};
 use meshlod_engine::simplify::{Metric, NormalUpdate, Simplified, SimplifyOptions, simplify as engine_simplify};
 use meshlod_engine::simplify::{prepare, simplify_search_w};
+use meshlod_engine::{Mesh, MeshError};
 use meshlod_predictor::Predictor;
 use tonic::Status;
 
@@ -177,7 +177,8 @@ fn refine_options(
     } else {
         "searched"
     };
-    let options = RefineOptions { etc, target_faces, mode, rounds: r.rounds.unwrap_or(1), cancel: None };
+    let options =
+        RefineOptions { etc, target_faces, mode, rounds: r.rounds.unwrap_or(1), cancel: None, max_faces: None };
     Ok((options, source, model_version))
 }
 
@@ -192,13 +193,14 @@ pub fn refine(
 ) -> Result<(Refined, proto::RefineStats), Status> {
     let (mut options, etc_source, model_version) = refine_options(mesh, r, predictor)?;
     options.cancel = cancel;
-    let result = engine_refine(mesh, &options).map_err(|e| engine_status(e, ""))?;
-    if result.mesh.face_count() > max_faces {
-        return Err(Status::invalid_argument(format!(
-            "rounds: the result would have {} faces, over the limit of {max_faces}",
-            result.mesh.face_count()
-        )));
-    }
+    options.max_faces = Some(max_faces);
+    // The output's size is known before each subdivision round is built: refused before the work.
+    let result = engine_refine(mesh, &options).map_err(|e| match e {
+        MeshError::TooLarge { what, count, limit } if what.starts_with("faces (refine") => Status::invalid_argument(
+            format!("rounds: the result would have {count} faces or more, over the limit of {limit}"),
+        ),
+        other => engine_status(other, ""),
+    })?;
     let s = &result.stats;
     let stats = proto::RefineStats {
         faces_in: s.faces_in as u32,

@@ -8,6 +8,10 @@ mod obj;
 mod ply;
 mod triangulate;
 
+/// Most corners one polygon of a file may have (its triangulation costs linear work whatever its
+/// shape; this bounds the memory of one face).
+pub const MAX_POLYGON_CORNERS: usize = 1 << 20;
+
 use std::io::Write;
 use std::path::{Path, PathBuf};
 

@@ -128,6 +128,19 @@ pub fn read_obj(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
                         format!("face has {} corners; a face needs at least 3", polygon.len()),
                     ));
                 }
+                if polygon.len() > super::MAX_POLYGON_CORNERS {
+                    return Err(MeshError::parse(
+                        path,
+                        format!("line {line}"),
+                        format!(
+                            "face has {} corners; at most {} are accepted",
+                            polygon.len(),
+                            super::MAX_POLYGON_CORNERS
+                        ),
+                    ));
+                }
+                // The face count is checked before the polygon is triangulated.
+                limits.check_faces((triangles.len() + polygon.len() - 2) as u64)?;
                 local_triangles.clear();
                 if polygon.len() == 3 {
                     local_triangles.push([0, 1, 2]);

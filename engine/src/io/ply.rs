@@ -400,6 +400,15 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
                 format!("refers to vertex {bad} but the file has {vertex_count} vertices"),
             ));
         }
+        if indices.len() > super::MAX_POLYGON_CORNERS {
+            return Err(MeshError::parse(
+                path,
+                format!("face {face}"),
+                format!("has {} corners; at most {} are accepted", indices.len(), super::MAX_POLYGON_CORNERS),
+            ));
+        }
+        // The face count is checked before the polygon is triangulated.
+        limits.check_faces((triangles.len() + indices.len().saturating_sub(2)) as u64)?;
         local.clear();
         if indices.len() == 3 {
             local.push([0, 1, 2]);

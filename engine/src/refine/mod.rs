@@ -52,11 +52,21 @@ pub struct RefineOptions {
     pub rounds: u32,
     /// Set to `true` by another thread to stop the work ([`MeshError::Cancelled`]).
     pub cancel: Option<Arc<AtomicBool>>,
+    /// Most faces the output may have: a subdivision round that would pass it is refused before
+    /// it is built ([`MeshError::TooLarge`]); `None` is no limit.
+    pub max_faces: Option<usize>,
 }
 
 impl Default for RefineOptions {
     fn default() -> Self {
-        RefineOptions { etc: Some(1.0), target_faces: None, mode: RefineMode::Subdivide, rounds: 1, cancel: None }
+        RefineOptions {
+            etc: Some(1.0),
+            target_faces: None,
+            mode: RefineMode::Subdivide,
+            rounds: 1,
+            cancel: None,
+            max_faces: None,
+        }
     }
 }
 
@@ -105,10 +115,14 @@ fn hot_edges(topology: &Topology, energies: &EnergyOperator, threshold: f64) -> 
         .collect()
 }
 
+/// Subdivides up to `rounds` times; before each round, the face count it would give is known
+/// exactly (each split edge adds one face per face on it), and a round that would pass
+/// `max_faces` is refused before it is built.
 fn subdivide_rounds(
     mesh: &Mesh,
     threshold: f64,
     rounds: u32,
+    max_faces: usize,
     cancel: Option<&AtomicBool>,
 ) -> Result<(Mesh, usize), MeshError> {
     let mut current = mesh.clone();
@@ -123,6 +137,15 @@ fn subdivide_rounds(
         let count = edges.iter().filter(|&&e| e).count();
         if count == 0 {
             break;
+        }
+        let added: usize = (0..edges.len()).filter(|&e| edges[e]).map(|e| topology.edge_faces.get(e).len()).sum();
+        let faces = current.face_count() + added;
+        if faces > max_faces {
+            return Err(MeshError::TooLarge {
+                what: "faces (refine output)",
+                count: faces as u64,
+                limit: max_faces as u64,
+            });
         }
         split += count;
         current = subdivide::subdivide_edges(&current, &topology, &edges);
@@ -172,6 +195,37 @@ fn etc_for_coarsening(popped: &[f64], mean: f64) -> f64 {
     if mean > 0.0 { threshold / mean } else { 0.0 }
 }
 
+/// Most faces one edge may have in a mesh given to [`refine`]: a manifold edge has two, a fin
+/// three; a fan of thousands (a stack of copies of one triangle, a book of faces on one edge) would
+/// make the energies and the collapses quadratic in the input.
+pub const MAX_FACES_PER_EDGE: usize = 16;
+
+/// Refuses meshes with an edge of more than [`MAX_FACES_PER_EDGE`] faces, in O(n log n).
+fn check_fans(mesh: &Mesh) -> Result<(), MeshError> {
+    let mut edges: Vec<(u32, u32)> = Vec::with_capacity(3 * mesh.face_count());
+    for t in &mesh.triangles {
+        for i in 0..3 {
+            let (a, b) = (t[i], t[(i + 1) % 3]);
+            edges.push((a.min(b), a.max(b)));
+        }
+    }
+    edges.sort_unstable();
+    for run in edges.chunk_by(|x, y| x == y) {
+        if run.len() > MAX_FACES_PER_EDGE {
+            let (a, b) = run[0];
+            return Err(MeshError::InvalidParameter {
+                name: "input",
+                reason: format!(
+                    "edge ({a}, {b}) has {} faces; refine accepts at most {MAX_FACES_PER_EDGE} faces on one edge \
+                     (clean the mesh first: duplicate or stacked faces)",
+                    run.len()
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Runs the energy-operator LOD on `mesh`.
 pub fn refine(mesh: &Mesh, options: &RefineOptions) -> Result<Refined, MeshError> {
     let started = Instant::now();
@@ -197,6 +251,7 @@ pub fn refine(mesh: &Mesh, options: &RefineOptions) -> Result<Refined, MeshError
     if options.target_faces == Some(0) {
         return Err(MeshError::InvalidParameter { name: "target_faces", reason: "target must be at least 1".into() });
     }
+    check_fans(&prepared)?;
     let faces_in = prepared.face_count();
     // Every face of the output exists in memory: refuse targets whose ETC search could not end.
     let limit = faces_in.saturating_mul(4usize.pow(options.rounds));
@@ -208,6 +263,12 @@ pub fn refine(mesh: &Mesh, options: &RefineOptions) -> Result<Refined, MeshError
             name: "target_faces",
             reason: format!("{t} faces need more than {} rounds of 1→4 subdivision from {faces_in}", options.rounds),
         });
+    }
+    let max_faces = options.max_faces.unwrap_or(usize::MAX);
+    if let Some(t) = options.target_faces
+        && t > max_faces
+    {
+        return Err(MeshError::TooLarge { what: "faces (refine target)", count: t as u64, limit: max_faces as u64 });
     }
     let energies = EnergyOperator::new(&prepared);
     let mean = energies.mean_face_energy;
@@ -223,16 +284,16 @@ pub fn refine(mesh: &Mesh, options: &RefineOptions) -> Result<Refined, MeshError
             (c.mesh, etc, 0, c.collapses)
         }
         (RefineMode::Subdivide, Some(etc), _) => {
-            let (m, split) = subdivide_rounds(&prepared, etc * mean, options.rounds, cancel)?;
+            let (m, split) = subdivide_rounds(&prepared, etc * mean, options.rounds, max_faces, cancel)?;
             (m, etc, split, 0)
         }
         (RefineMode::Subdivide, None, Some(target)) => {
             let etc = if options.rounds == 1 {
                 etc_for_subdivision_target(&prepared, &energies, target)
             } else {
-                search_etc(&prepared, mean, target, options.rounds, cancel)?
+                search_etc(&prepared, mean, target, options.rounds, max_faces, cancel)?
             };
-            let (m, split) = subdivide_rounds(&prepared, etc * mean, options.rounds, cancel)?;
+            let (m, split) = subdivide_rounds(&prepared, etc * mean, options.rounds, max_faces, cancel)?;
             (m, etc, split, 0)
         }
         (RefineMode::Both, etc, target) => {
@@ -246,7 +307,7 @@ pub fn refine(mesh: &Mesh, options: &RefineOptions) -> Result<Refined, MeshError
                 }
             };
             let c = coarsen::coarsen(&prepared, etc * mean, 0, cancel)?;
-            let (m, split) = subdivide_rounds(&c.mesh, etc * mean, options.rounds, cancel)?;
+            let (m, split) = subdivide_rounds(&c.mesh, etc * mean, options.rounds, max_faces, cancel)?;
             (m, etc, split, c.collapses)
         }
         (_, None, None) => unreachable!("checked above"),
@@ -271,10 +332,16 @@ fn search_etc(
     mean: f64,
     target: usize,
     rounds: u32,
+    max_faces: usize,
     cancel: Option<&AtomicBool>,
 ) -> Result<f64, MeshError> {
     let (mut lo, mut hi) = (0.0f64, 1.0f64);
-    let count = |etc: f64| subdivide_rounds(mesh, etc * mean, rounds, cancel).map(|(m, _)| m.face_count());
+    // A trial over the limit is simply too many faces: the search raises the ETC.
+    let count = |etc: f64| match subdivide_rounds(mesh, etc * mean, rounds, max_faces, cancel) {
+        Ok((m, _)) => Ok(m.face_count()),
+        Err(MeshError::TooLarge { .. }) => Ok(usize::MAX),
+        Err(e) => Err(e),
+    };
     while count(hi)? > target && hi < 1e6 {
         hi *= 2.0;
     }

@@ -3,7 +3,7 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-use tokio::sync::Semaphore;
+use tokio::sync::{OwnedSemaphorePermit, Semaphore};
 use tonic::Status;
 
 use crate::metrics::Metrics;
@@ -56,12 +56,9 @@ impl Admission {
         }
     }
 
-    /// Runs `work` on a blocking thread once a slot is free, with a cancel flag that is raised if
-    /// this future is dropped first; refuses at once when the waiting line is full.
-    pub(super) async fn run<T: Send + 'static>(
-        &self,
-        work: impl FnOnce(Arc<AtomicBool>) -> Result<T, Status> + Send + 'static,
-    ) -> Result<T, Status> {
+    /// A slot, once one is free; refused at once when the waiting line is full. Taken before any
+    /// of the request's work or buffering (an upload is read only once admitted).
+    pub(super) async fn admit(&self) -> Result<Admitted, Status> {
         let permit = match self.slots.clone().try_acquire_owned() {
             Ok(p) => p,
             Err(_) => {
@@ -86,11 +83,36 @@ impl Admission {
                 self.slots.clone().acquire_owned().await.map_err(|_| Status::unavailable("shutting down"))?
             }
         };
+        Ok(Admitted { permit, metrics: self.metrics.clone() })
+    }
+
+    /// [`Admission::admit`], then [`Admitted::run`].
+    pub(super) async fn run<T: Send + 'static>(
+        &self,
+        work: impl FnOnce(Arc<AtomicBool>) -> Result<T, Status> + Send + 'static,
+    ) -> Result<T, Status> {
+        self.admit().await?.run(work).await
+    }
+}
+
+/// A held slot.
+pub(super) struct Admitted {
+    permit: OwnedSemaphorePermit,
+    metrics: Arc<Metrics>,
+}
+
+impl Admitted {
+    /// Runs `work` on a blocking thread in this slot, with a cancel flag that is raised if this
+    /// future is dropped first. The slot is held until the work really ends.
+    pub(super) async fn run<T: Send + 'static>(
+        self,
+        work: impl FnOnce(Arc<AtomicBool>) -> Result<T, Status> + Send + 'static,
+    ) -> Result<T, Status> {
         let cancel = Arc::new(AtomicBool::new(false));
         let mut guard = CancelOnDrop(cancel.clone(), false);
-        let metrics = self.metrics.clone();
+        let Admitted { permit, metrics } = self;
         let handle = tokio::task::spawn_blocking(move || {
-            let _permit = permit; // the slot is held until the work really ends
+            let _permit = permit;
             let _in_flight = Gauge::enter(&metrics, Metrics::add_in_flight);
             work(cancel)
         });

@@ -8,10 +8,13 @@
 //!   heavy request carries a cancel flag that the engine reads inside its loops; the flag is raised
 //!   when the request's future is dropped (client cancel, deadline), so the work stops within
 //!   milliseconds and its CPU slot frees;
-//! - `auth` — the bearer token check.
+//! - `auth` — the bearer token check;
+//! - `codes` — the contract's codes for the codec's errors (undecodable → INVALID_ARGUMENT,
+//!   oversize → RESOURCE_EXHAUSTED).
 
 mod admission;
 mod auth;
+mod codes;
 mod service;
 
 use std::future::Future;
@@ -101,7 +104,11 @@ pub async fn serve_with_listener(
         .send_compressed(CompressionEncoding::Zstd)
         .max_decoding_message_size(config.max_message_bytes)
         .max_encoding_message_size(config.max_message_bytes);
-    let server = tonic::service::interceptor::InterceptedService::new(server, TokenCheck::new(config.token.as_deref()));
+    // Outermost, so that it sees the transport's headers (the interceptor drops grpc-timeout).
+    let server = codes::ContractCodes(tonic::service::interceptor::InterceptedService::new(
+        server,
+        TokenCheck::new(config.token.as_deref()),
+    ));
     let mut builder = tonic::transport::Server::builder()
         .trace_fn(|request| tracing::info_span!("grpc", path = %request.uri().path()));
     if let Some((cert, key)) = &config.tls {

@@ -13,6 +13,7 @@ use tonic::{Request, Response, Status};
 
 use super::ServerConfig;
 use super::admission::Admission;
+use super::codes;
 use crate::convert::{self, engine_status, mesh_from_input, mesh_to_proto, progressive_to_proto, split_to_proto};
 use crate::jobs;
 use crate::metrics::Metrics;
@@ -27,6 +28,55 @@ pub struct MeshLodService {
     metrics: Arc<Metrics>,
 }
 
+/// The outcome of one call, recorded once: when the call ends, or — when its future is dropped
+/// first (the client cancelled, or its deadline passed) — as CANCELLED or DEADLINE_EXCEEDED.
+struct Outcome<'a> {
+    metrics: &'a Metrics,
+    method: &'static str,
+    started: Instant,
+    deadline: Option<codes::CallDeadline>,
+    recorded: bool,
+}
+
+impl<'a> Outcome<'a> {
+    fn start(metrics: &'a Metrics, method: &'static str, deadline: Option<codes::CallDeadline>) -> Outcome<'a> {
+        Outcome { metrics, method, started: Instant::now(), deadline, recorded: false }
+    }
+
+    fn record(&mut self, code: tonic::Code, message: &str) {
+        self.recorded = true;
+        let elapsed = self.started.elapsed();
+        self.metrics.record(self.method, code, elapsed);
+        if code == tonic::Code::Ok {
+            tracing::info!(method = self.method, ms = elapsed.as_millis() as u64, "ok");
+        } else {
+            tracing::warn!(method = self.method, code = ?code, message, "refused or failed");
+        }
+    }
+
+    fn finish<T>(mut self, result: &Result<T, Status>) {
+        match result {
+            Ok(_) => self.record(tonic::Code::Ok, ""),
+            Err(s) => self.record(s.code(), s.message()),
+        }
+    }
+}
+
+impl Drop for Outcome<'_> {
+    fn drop(&mut self) {
+        if !self.recorded {
+            let expired = self.deadline.is_some_and(|d| d.expired());
+            let code = if expired { tonic::Code::DeadlineExceeded } else { tonic::Code::Cancelled };
+            self.record(code, "the call ended before its work");
+        }
+    }
+}
+
+/// The call's deadline, as the transport layer read it ([`codes::CallDeadline`]).
+fn deadline<T>(request: &Request<T>) -> Option<codes::CallDeadline> {
+    request.extensions().get::<codes::CallDeadline>().copied()
+}
+
 impl MeshLodService {
     /// A service with its own admission control and metrics.
     pub fn new(config: ServerConfig, metrics: Arc<Metrics>) -> Self {
@@ -34,23 +84,18 @@ impl MeshLodService {
         MeshLodService { config: Arc::new(config), admission: Arc::new(admission), metrics }
     }
 
-    /// Runs `work` once admitted, and records its outcome.
+    /// Runs `work` once admitted, and records its outcome (also when the call goes away first).
     async fn run<T: Send + 'static>(
         &self,
         method: &'static str,
+        deadline: Option<codes::CallDeadline>,
         work: impl FnOnce(Arc<AtomicBool>) -> Result<T, Status> + Send + 'static,
     ) -> Result<T, Status> {
-        let started = Instant::now();
+        let outcome = Outcome::start(&self.metrics, method, deadline);
         let result = self.admission.run(work).await;
-        let code = result.as_ref().map_or_else(|s| s.code(), |_| tonic::Code::Ok);
-        self.metrics.record(method, code, started.elapsed());
-        match &result {
-            Ok(_) => tracing::info!(method, ms = started.elapsed().as_millis() as u64, "ok"),
-            Err(s) => tracing::warn!(method, code = ?s.code(), message = s.message(), "refused or failed"),
-        }
+        outcome.finish(&result);
         result
     }
-
     /// Reads the request's mesh and simplifies it; `progressive` forces the progressive mesh on.
     fn simplification(
         &self,
@@ -71,15 +116,20 @@ impl MeshLodService {
     async fn simplify_unary(
         &self,
         method: &'static str,
+        deadline: Option<codes::CallDeadline>,
         request: proto::SimplifyRequest,
     ) -> Result<Response<proto::SimplifyResponse>, Status> {
-        let run = self.run(method, self.simplification(request, false)).await?;
-        Ok(Response::new(proto::SimplifyResponse {
-            mesh: Some(mesh_to_proto(&run.result.mesh)),
-            progressive: run.result.progressive.as_ref().map(progressive_to_proto),
-            stats: Some(run.stats),
-            hausdorff: run.hausdorff,
-        }))
+        let run = self.run(method, deadline, self.simplification(request, false)).await?;
+        Ok(Response::new(simplify_response(run)))
+    }
+}
+
+fn simplify_response(run: jobs::Simplification) -> proto::SimplifyResponse {
+    proto::SimplifyResponse {
+        mesh: Some(mesh_to_proto(&run.result.mesh)),
+        progressive: run.result.progressive.as_ref().map(progressive_to_proto),
+        stats: Some(run.stats),
+        hausdorff: run.hausdorff,
     }
 }
 
@@ -89,7 +139,8 @@ impl MeshLod for MeshLodService {
         &self,
         request: Request<proto::SimplifyRequest>,
     ) -> Result<Response<proto::SimplifyResponse>, Status> {
-        self.simplify_unary("Simplify", request.into_inner()).await
+        let deadline = deadline(&request);
+        self.simplify_unary("Simplify", deadline, request.into_inner()).await
     }
 
     type SimplifyStreamStream = ReceiverStream<Result<proto::SimplifyStreamMessage, Status>>;
@@ -98,7 +149,8 @@ impl MeshLod for MeshLodService {
         &self,
         request: Request<proto::SimplifyRequest>,
     ) -> Result<Response<Self::SimplifyStreamStream>, Status> {
-        let run = self.run("SimplifyStream", self.simplification(request.into_inner(), true)).await?;
+        let deadline = deadline(&request);
+        let run = self.run("SimplifyStream", deadline, self.simplification(request.into_inner(), true)).await?;
         let pm = run.result.progressive.expect("progressive forced on");
         let stats = run.stats;
         // Splits are ~20–40 bytes encoded; batch so each message stays under the configured size.
@@ -128,36 +180,59 @@ impl MeshLod for MeshLodService {
         &self,
         request: Request<tonic::Streaming<proto::MeshChunk>>,
     ) -> Result<Response<proto::SimplifyResponse>, Status> {
+        let mut outcome = Outcome::start(&self.metrics, "SimplifyUpload", deadline(&request));
+        // A slot first: an upload is buffered only once it may run, so uploads waiting for a slot
+        // hold no memory, and at most `max_concurrent` are buffered at once.
+        let admitted = match self.admission.admit().await {
+            Ok(a) => a,
+            Err(s) => {
+                outcome.record(s.code(), s.message());
+                return Err(s);
+            }
+        };
         let mut stream = request.into_inner();
         let limits = self.config.limits;
         let mut options = None;
         let mut mesh = proto::Mesh::default();
-        while let Some(chunk) = stream.message().await? {
-            if options.is_none() {
-                options = Some(chunk.options.unwrap_or_default());
+        let received: Result<(), Status> = async {
+            while let Some(chunk) = stream.message().await.map_err(codes::contract_status)? {
+                if options.is_none() {
+                    options = Some(chunk.options.unwrap_or_default());
+                }
+                if (mesh.positions.len() + chunk.positions.len()) / 3 > limits.max_vertices
+                    || (mesh.indices.len() + chunk.indices.len()) / 3 > limits.max_faces
+                {
+                    return Err(Status::invalid_argument(format!(
+                        "input: mesh too large: the upload passed {} vertices or {} faces",
+                        limits.max_vertices, limits.max_faces
+                    )));
+                }
+                mesh.positions.extend_from_slice(&chunk.positions);
+                mesh.indices.extend_from_slice(&chunk.indices);
             }
-            mesh.positions.extend_from_slice(&chunk.positions);
-            mesh.indices.extend_from_slice(&chunk.indices);
-            if mesh.positions.len() / 3 > limits.max_vertices || mesh.indices.len() / 3 > limits.max_faces {
-                return Err(Status::invalid_argument(format!(
-                    "input: mesh too large: the upload passed {} vertices or {} faces",
-                    limits.max_vertices, limits.max_faces
-                )));
-            }
+            Ok(())
+        }
+        .await;
+        if let Err(s) = received {
+            outcome.record(s.code(), s.message());
+            return Err(s);
         }
         let request = proto::SimplifyRequest {
             input: Some(proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(mesh)) }),
             options,
         };
-        self.simplify_unary("SimplifyUpload", request).await
+        let result = admitted.run(self.simplification(request, false)).await;
+        outcome.finish(&result);
+        Ok(Response::new(simplify_response(result?)))
     }
 
     async fn refine(&self, request: Request<proto::RefineRequest>) -> Result<Response<proto::RefineResponse>, Status> {
+        let deadline = deadline(&request);
         let request = request.into_inner();
         let predictor = self.config.predictor.clone();
         let limits = self.config.limits;
         let response = self
-            .run("Refine", move |cancel| {
+            .run("Refine", deadline, move |cancel| {
                 let mesh = mesh_from_input(request.input.as_ref(), "input", &limits)?;
                 let (result, stats) =
                     jobs::refine(&mesh, &request, predictor.as_deref(), Some(cancel), limits.max_faces)?;
@@ -171,10 +246,11 @@ impl MeshLod for MeshLodService {
         &self,
         request: Request<proto::HausdorffRequest>,
     ) -> Result<Response<proto::HausdorffReport>, Status> {
+        let deadline = deadline(&request);
         let request = request.into_inner();
         let limits = self.config.limits;
         let report = self
-            .run("Hausdorff", move |cancel| {
+            .run("Hausdorff", deadline, move |cancel| {
                 let mut options = convert::hausdorff_options(request.tolerance, request.samples)?;
                 let a = mesh_from_input(request.a.as_ref(), "a", &limits)?;
                 let b = mesh_from_input(request.b.as_ref(), "b", &limits)?;
@@ -194,6 +270,7 @@ impl MeshLod for MeshLodService {
         &self,
         request: Request<proto::PredictRequest>,
     ) -> Result<Response<proto::PredictResponse>, Status> {
+        let deadline = deadline(&request);
         let request = request.into_inner();
         let limits = self.config.limits;
         let Some(predictor) = self.config.predictor.clone() else {
@@ -201,7 +278,7 @@ impl MeshLod for MeshLodService {
             return Err(Status::failed_precondition("this server runs without a predictor model"));
         };
         let response = self
-            .run("Predict", move |_cancel| {
+            .run("Predict", deadline, move |_cancel| {
                 let subject = request.subject.as_ref().ok_or_else(|| Status::invalid_argument("subject: missing"))?;
                 match subject {
                     proto::predict_request::Subject::Input(input) => {
