@@ -288,7 +288,7 @@ fn huge_polygons_are_triangulated_in_bounded_work_or_refused() {
         let a = std::f64::consts::TAU * i as f64 / n as f64;
         text.push_str(&format!("v {} {} 0\n", a.cos(), a.sin()));
     }
-    text.push_str("f");
+    text.push('f');
     for i in 0..n {
         text.push_str(&format!(" {}", i + 1));
     }

@@ -30,7 +30,8 @@ pub(crate) fn triangulate_polygon(points: &[DVec3], out: &mut Vec<[usize; 3]>) {
         let (a, b) = (points[i], points[(i + 1) % n]);
         normal += DVec3::new((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y));
     }
-    if !(normal.length_squared() > 0.0) {
+    // Zero, or NaN from a non-finite corner: no plane to clip in.
+    if normal.length_squared().is_nan() || normal.length_squared() <= 0.0 {
         fan(0..n, out);
         return;
     }
@@ -121,10 +122,10 @@ impl<'a> EarClipper<'a> {
             work: 0,
             budget: WORK_PER_CORNER * n + 1024,
         };
-        for i in 0..n {
+        for (i, &p) in flat.iter().enumerate() {
             if clipper.turn(i) <= 0.0 {
                 clipper.reflex[i] = true;
-                clipper.by_z.push((clipper.z(flat[i]), i));
+                clipper.by_z.push((clipper.z(p), i));
             }
         }
         clipper.by_z.sort_unstable();

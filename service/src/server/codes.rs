@@ -102,11 +102,8 @@ where
             let mut response = future.await?;
             let headers = response.headers_mut();
             let code = headers.get("grpc-status").and_then(|v| v.to_str().ok()).and_then(|v| v.parse::<i32>().ok());
-            let message = headers
-                .get("grpc-message")
-                .and_then(|v| v.to_str().ok())
-                .map(|m| percent_decode(m))
-                .unwrap_or_default();
+            let message =
+                headers.get("grpc-message").and_then(|v| v.to_str().ok()).map(percent_decode).unwrap_or_default();
             if let Some(new) = code.and_then(|c| contract_code(tonic::Code::from_i32(c), &message)) {
                 headers.insert("grpc-status", http::HeaderValue::from(new as i32));
             }
