@@ -106,6 +106,9 @@ fn errors_are_clear_and_nonzero() {
     let empty = dir.join("empty.obj");
     std::fs::write(&empty, "v 0 0 0\n").unwrap();
     fails_with(&["hausdorff", s(&empty), s(&empty)], "no faces");
+    // Errors about the input mesh name its file.
+    fails_with(&["simplify", s(&empty), "-o", s(&dir.join("e.ply"))], "empty.obj: mesh is empty");
+    fails_with(&["refine", s(&empty), "-o", s(&dir.join("e.ply")), "--etc", "1"], "empty.obj: mesh is empty");
     fails_with(&["convert", s(&nan), s(&dir.join("out.ply"))], "line 2");
     let good = dir.join("good.obj");
     std::fs::write(&good, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();

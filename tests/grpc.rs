@@ -200,7 +200,18 @@ async fn every_rpc_over_loopback() {
         })
         .await
         .unwrap_err();
-    assert!(bad.code() == Code::InvalidArgument && bad.message().starts_with("features.values"), "{bad:?}");
+    assert!(bad.code() == Code::InvalidArgument && bad.message().starts_with("features.values:"), "{bad:?}");
+    let mut nan = vec![1.0; 8];
+    nan[3] = f32::NAN;
+    let bad = client
+        .predict(proto::PredictRequest {
+            subject: Some(proto::predict_request::Subject::Features(proto::ShapeFeatures { values: nan })),
+            target_faces: Some(10),
+            target_ratio: Some(0.5),
+        })
+        .await
+        .unwrap_err();
+    assert!(bad.code() == Code::InvalidArgument && bad.message().starts_with("features.values[3]:"), "{bad:?}");
 
     // w chosen by the predictor.
     let auto = client
@@ -353,14 +364,43 @@ async fn invalid_requests_name_the_field() {
                 }),
                 ..simplify_request(&procedural::icosphere(2), 0.5)
             },
-            "guard",
+            "options.guard",
         ),
-        (simplify_request(&procedural::icosphere(4), 0.5), "mesh too large"),
+        (
+            proto::SimplifyRequest {
+                options: Some(proto::SimplifyOptions { max_normal_change_degrees: Some(0.0), ..Default::default() }),
+                ..simplify_request(&procedural::icosphere(2), 0.5)
+            },
+            "options.max_normal_change_degrees",
+        ),
+        (
+            proto::SimplifyRequest {
+                options: Some(proto::SimplifyOptions { metric: 42, ..Default::default() }),
+                ..simplify_request(&procedural::icosphere(2), 0.5)
+            },
+            "options.metric",
+        ),
+        (simplify_request(&procedural::icosphere(4), 0.5), "input.mesh"),
     ];
+    // The path before the first ": " is exactly the request field, as the proto spells it.
+    let path = |s: &tonic::Status| s.message().split_once(": ").map(|(p, _)| p.to_string()).unwrap_or_default();
     for (request, field) in cases {
         let status = client.simplify(request).await.unwrap_err();
         assert_eq!(status.code(), Code::InvalidArgument, "{field}: {status:?}");
-        assert!(status.message().contains(field), "{field}: message '{}'", status.message());
+        assert_eq!(path(&status), field, "message '{}'", status.message());
+    }
+    let refine_with = |r: proto::RefineRequest| proto::RefineRequest { input: input(&procedural::icosphere(1)), ..r };
+    let refine_cases = vec![
+        (refine_with(proto::RefineRequest { etc: Some(-1.0), ..Default::default() }), "etc"),
+        (refine_with(proto::RefineRequest { etc: Some(1.0), rounds: Some(0), ..Default::default() }), "rounds"),
+        (refine_with(proto::RefineRequest { target_faces: Some(0), mode: 1, ..Default::default() }), "target_faces"),
+        (refine_with(proto::RefineRequest { etc: Some(1.0), mode: 9, ..Default::default() }), "mode"),
+        (refine_with(proto::RefineRequest { etc: Some(1.0), target_faces: Some(10), ..Default::default() }), "etc"),
+    ];
+    for (request, field) in refine_cases {
+        let status = client.refine(request).await.unwrap_err();
+        assert_eq!(status.code(), Code::InvalidArgument, "{field}: {status:?}");
+        assert_eq!(path(&status), field, "message '{}'", status.message());
     }
     let bad_file = proto::SimplifyRequest {
         input: Some(proto::MeshInput {

@@ -426,7 +426,7 @@ fn serve(args: ServeArgs) -> Result<()> {
         max_concurrent: args.max_concurrent.unwrap_or(defaults.max_concurrent),
         max_queue: args.max_queue.unwrap_or(defaults.max_queue),
         max_message_bytes: args.max_message_mib << 20,
-        limits: MeshLimits { max_faces: args.max_faces, max_vertices: args.max_faces },
+        limits: MeshLimits::for_faces(args.max_faces),
         tls: args.tls_cert.zip(args.tls_key),
         token: args.token,
         ..defaults

@@ -22,6 +22,14 @@ pub struct MeshLimits {
     pub max_vertices: usize,
 }
 
+impl MeshLimits {
+    /// Limits from a face count alone (`--max-faces`): vertices up to three per face, which no
+    /// mesh without unused vertices exceeds, so the face limit is the one a user meets.
+    pub fn for_faces(max_faces: usize) -> MeshLimits {
+        MeshLimits { max_faces, max_vertices: max_faces.saturating_mul(3) }
+    }
+}
+
 impl Default for MeshLimits {
     /// 10 million faces and vertices: well above the 2-million-triangle meshes the service is
     /// sized for, well below what exhausts a pod's memory.
@@ -103,7 +111,10 @@ pub fn mesh_from_proto(m: &proto::Mesh, field: &str, limits: &MeshLimits) -> Res
     if vertex_count > limits.max_vertices {
         return Err(invalid(
             field,
-            format!("mesh too large: {vertex_count} vertices exceeds the limit of {}", limits.max_vertices),
+            format!(
+                "mesh too large: {vertex_count} vertices exceeds the limit of {} (unused vertices count too)",
+                limits.max_vertices
+            ),
         ));
     }
     if let Some(i) = m.positions.iter().position(|c| !c.is_finite()) {

@@ -144,9 +144,14 @@ impl Local {
     }
 }
 
-/// A status from the jobs as an error for people: its message names the field.
-fn status_error(status: tonic::Status) -> anyhow::Error {
-    anyhow::anyhow!("{}", status.message())
+/// A status from the jobs as an error for people: its message names the field, and the file
+/// where the field is the input mesh.
+fn status_error(status: tonic::Status, input: &Path) -> anyhow::Error {
+    let message = status.message();
+    match message.strip_prefix("input") {
+        Some(rest) if rest.starts_with(':') || rest.starts_with('.') => anyhow::anyhow!("{}{rest}", input.display()),
+        _ => anyhow::anyhow!("{message}"),
+    }
 }
 
 impl Executor for Local {
@@ -155,7 +160,8 @@ impl Executor for Local {
         let mesh = load(&job.input)?;
         let options = proto::SimplifyOptions { return_progressive: job.pm.is_some(), ..job.options };
         let predictor = self.predictor_if(options.w_auto)?;
-        let run = crate::jobs::simplify(&mesh, &options, predictor.as_deref(), None).map_err(status_error)?;
+        let run = crate::jobs::simplify(&mesh, &options, predictor.as_deref(), None)
+            .map_err(|e| status_error(e, &job.input))?;
         finish_simplify(job, &run.result.mesh, run.result.progressive.as_ref(), &run.stats, run.hausdorff.as_ref())
     }
 
@@ -163,16 +169,16 @@ impl Executor for Local {
         output_format(&job.output)?;
         let mesh = load(&job.input)?;
         let predictor = self.predictor_if(job.request.etc_auto)?;
-        let (result, stats) =
-            crate::jobs::refine(&mesh, &job.request, predictor.as_deref(), None, usize::MAX).map_err(status_error)?;
+        let (result, stats) = crate::jobs::refine(&mesh, &job.request, predictor.as_deref(), None, usize::MAX)
+            .map_err(|e| status_error(e, &job.input))?;
         finish_refine(job, &result.mesh, &stats)
     }
 
     fn predict(&self, job: &PredictJob) -> Result<Report> {
         let mesh = load(&job.input)?;
         let predictor = self.predictor()?;
-        let response =
-            crate::jobs::predict_mesh(&predictor, &mesh, job.target_faces, job.target_ratio).map_err(status_error)?;
+        let response = crate::jobs::predict_mesh(&predictor, &mesh, job.target_faces, job.target_ratio)
+            .map_err(|e| status_error(e, &job.input))?;
         Ok(report::predict(&response))
     }
 }
