@@ -165,10 +165,10 @@ fn arbitrary_mesh(rng: &mut SplitMix64) -> Mesh {
     let faces = 1 + (rng.next_u64() % 120) as usize;
     let positions = (0..vertices)
         .map(|i| {
-            if i > 0 && rng.next_u64() % 8 == 0 {
+            if i > 0 && rng.next_u64().is_multiple_of(8) {
                 [0.0, 0.0, 0.0]
             } else {
-                let scale = if rng.next_u64() % 16 == 0 { 1e6 } else { 1.0 };
+                let scale = if rng.next_u64().is_multiple_of(16) { 1e6 } else { 1.0 };
                 [rng.next_f64() as f32 * scale, rng.next_f64() as f32 * scale, rng.next_f64() as f32 * scale]
             }
         })
@@ -198,7 +198,7 @@ fn simplify_pm_and_levels_survive_arbitrary_meshes() {
                 _ => Metric::Melax,
             },
             placement: [Placement::Optimal, Placement::Paper, Placement::Endpoint][(rng.next_u64() % 3) as usize],
-            boundary: if rng.next_u64() % 2 == 0 { BoundaryMode::Preserve } else { BoundaryMode::Lock },
+            boundary: if rng.next_u64().is_multiple_of(2) { BoundaryMode::Preserve } else { BoundaryMode::Lock },
             record_progressive: true,
             ..Default::default()
         };
