@@ -265,3 +265,20 @@ pub fn hausdorff_options(
     })?;
     Ok(options)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_face_limit_is_the_limit_a_user_meets() {
+        // Two faces and five vertices (one unused) under --max-faces 2: accepted; the message a
+        // user can act on is about faces.
+        let limits = MeshLimits::for_faces(2);
+        let mesh = proto::Mesh { positions: vec![0.0; 15], indices: vec![0, 1, 2, 0, 2, 3], ..Default::default() };
+        assert!(mesh_from_proto(&mesh, "input.mesh", &limits).is_ok());
+        let three = proto::Mesh { indices: vec![0, 1, 2, 0, 2, 3, 1, 2, 3], ..mesh };
+        let status = mesh_from_proto(&three, "input.mesh", &limits).unwrap_err();
+        assert!(status.message().contains("3 faces exceeds the limit of 2"), "{}", status.message());
+    }
+}

@@ -319,7 +319,10 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
             if xyz_slots.contains(&usize::MAX) {
                 return Err(MeshError::parse(path, "header", "vertex element lacks scalar x, y and z properties"));
             }
-            positions.reserve(element.count as usize);
+            // A header can claim any count: room only for what the body could hold (a vertex takes
+            // at least one byte per property), the rest grows as values are really read.
+            let could_hold = body.len() / element.properties.len().max(1);
+            positions.reserve((element.count as usize).min(could_hold));
         }
         let index_list = if is_face {
             let by_name = element.properties.iter().position(

@@ -124,3 +124,24 @@ impl Admitted {
         result
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn gauge(metrics: &Metrics, name: &str) -> i64 {
+        metrics.render().lines().find_map(|l| l.strip_prefix(&format!("{name} "))).unwrap().trim().parse().unwrap()
+    }
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn a_panicking_worker_gives_back_its_slot_and_its_gauge() {
+        let metrics = Arc::new(Metrics::default());
+        let admission = Admission::new(1, 0, metrics.clone());
+        let status = admission.run(|_| -> Result<(), Status> { panic!("a bug in the work") }).await.unwrap_err();
+        assert_eq!(status.code(), tonic::Code::Internal);
+        assert_eq!(gauge(&metrics, "meshlod_in_flight"), 0, "the gauge was left up by the panic");
+        // The only slot is free again.
+        assert_eq!(admission.run(|_| Ok(7)).await.unwrap(), 7);
+        assert_eq!(gauge(&metrics, "meshlod_queue_depth"), 0);
+    }
+}
