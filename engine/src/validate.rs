@@ -180,7 +180,9 @@ pub(crate) fn fan_count(mesh: &Mesh, topology: &Topology, v: u32) -> usize {
                     continue;
                 }
                 for g in topology.edge_faces.get(e as usize) {
-                    if let Some(j) = faces.iter().position(|h| h == g)
+                    // The faces at v are in face order: found in O(log valence), so a hub vertex
+                    // costs O(valence · log valence), not its square.
+                    if let Ok(j) = faces.binary_search_by_key(&g.index(), |h| h.index())
                         && labels[j] == u32::MAX
                     {
                         labels[j] = fans;
