@@ -1,8 +1,9 @@
 //! Polygon triangulation for faces with more than three corners, in work bounded by the corner
 //! count whatever the polygon.
 //!
-//! In the plane of the polygon's Newell normal: a convex polygon (every turn the same way, one
-//! winding) is fanned, O(n). Any other is ear-clipped over a linked list, each candidate ear tested
+//! In the plane of the polygon's Newell normal: a polygon of at most 64 corners is clipped ear by
+//! ear from its start (as meshlod always has, so meshes read before keep their triangles); a larger
+//! convex polygon (every turn the same way, one winding) is fanned, O(n). Any other is ear-clipped over a linked list, each candidate ear tested
 //! only against the reflex corners whose z-order (Morton) code lies between those of its bounding
 //! box's corners (only a reflex corner can lie inside an ear), as earcut does. The tests are counted against a budget linear in n; a polygon that uses it up
 //! (self-intersecting, degenerate, or built to be slow) has its rest fanned from one corner, which is
@@ -39,11 +40,50 @@ pub(crate) fn triangulate_polygon(points: &[DVec3], out: &mut Vec<[usize; 3]>) {
     let u = normal.any_orthonormal_vector();
     let v = normal.cross(u);
     let flat: Vec<DVec2> = points.iter().map(|p| DVec2::new(p.dot(u), p.dot(v))).collect();
-    if is_convex(&flat) {
+    if n <= SMALL_POLYGON {
+        clip_small(&flat, out);
+    } else if is_convex(&flat) {
         fan(0..n, out);
-        return;
+    } else {
+        EarClipper::new(&flat).run(out);
     }
-    EarClipper::new(&flat).run(out);
+}
+
+/// Polygons up to this many corners (every one a modelling tool writes, in practice) are clipped
+/// by [`clip_small`], whose triangles every mesh read so far was made of.
+const SMALL_POLYGON: usize = 64;
+
+/// Ear clipping that takes the first ear from the start of the remaining corners each time:
+/// O(n³) but at most [`SMALL_POLYGON`] corners; if no ear is found (a self-intersecting or
+/// degenerate polygon) the rest is fanned.
+fn clip_small(flat: &[DVec2], out: &mut Vec<[usize; 3]>) {
+    let mut remaining: Vec<usize> = (0..flat.len()).collect();
+    while remaining.len() > 3 {
+        let m = remaining.len();
+        let ear = (0..m).find(|&i| {
+            let (a, b, c) = (remaining[(i + m - 1) % m], remaining[i], remaining[(i + 1) % m]);
+            is_small_ear(flat, [a, b, c], &remaining)
+        });
+        match ear {
+            Some(i) => {
+                out.push([remaining[(i + m - 1) % m], remaining[i], remaining[(i + 1) % m]]);
+                remaining.remove(i);
+            }
+            None => break,
+        }
+    }
+    fan(remaining.into_iter(), out);
+}
+
+fn is_small_ear(flat: &[DVec2], [a, b, c]: [usize; 3], remaining: &[usize]) -> bool {
+    let (pa, pb, pc) = (flat[a], flat[b], flat[c]);
+    if cross(pa, pb, pc) <= 0.0 {
+        return false; // reflex or degenerate corner
+    }
+    remaining.iter().filter(|&&i| i != a && i != b && i != c).all(|&i| {
+        let p = flat[i];
+        !(cross(pa, pb, p) >= 0.0 && cross(pb, pc, p) >= 0.0 && cross(pc, pa, p) >= 0.0)
+    })
 }
 
 /// Triangles (c₀, cᵢ, cᵢ₊₁) over the corners in order.
