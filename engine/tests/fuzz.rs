@@ -110,7 +110,7 @@ fn no_panic<T>(what: &str, seed: u64, case: u64, input: &[u8], f: impl FnOnce() 
 
 /// Small limits, so that a lying count is refused rather than allocated.
 fn limits() -> ReadLimits {
-    ReadLimits { max_vertices: 200_000, max_faces: 200_000 }
+    ReadLimits { max_vertices: 200_000, max_faces: 200_000, cancel: None }
 }
 
 #[test]

@@ -63,10 +63,10 @@ fn obj_refusals_name_the_line() {
 
 #[test]
 fn obj_limits_are_enforced() {
-    let limits = ReadLimits { max_vertices: 3, max_faces: 1 };
+    let limits = ReadLimits { max_vertices: 3, max_faces: 1, cancel: None };
     let r = read_mesh_bytes(SQUARE_OBJ.as_bytes(), Some(MeshFormat::Obj), Path::new("t.obj"), &limits);
     assert!(matches!(r, Err(MeshError::TooLarge { what: "vertices", count: 4, limit: 3 })), "{r:?}");
-    let limits = ReadLimits { max_vertices: 10, max_faces: 1 };
+    let limits = ReadLimits { max_vertices: 10, max_faces: 1, cancel: None };
     let r = read_mesh_bytes(SQUARE_OBJ.as_bytes(), Some(MeshFormat::Obj), Path::new("t.obj"), &limits);
     assert!(matches!(r, Err(MeshError::TooLarge { what: "faces", .. })), "{r:?}");
 }
@@ -304,4 +304,16 @@ fn huge_polygons_are_triangulated_in_bounded_work_or_refused() {
     }
     repeated.push('\n');
     assert_eq!(obj(&repeated).unwrap().face_count(), 30_000 - 2);
+}
+
+#[test]
+fn a_read_stops_when_cancelled() {
+    let flag = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(true));
+    let limits = ReadLimits { cancel: Some(flag), ..ReadLimits::default() };
+    let mut ply_bytes = Vec::new();
+    write_mesh_to(&mut ply_bytes, &procedural::icosphere(3), MeshFormat::Ply).unwrap();
+    for (bytes, format) in [(SQUARE_OBJ.as_bytes().to_vec(), MeshFormat::Obj), (ply_bytes, MeshFormat::Ply)] {
+        let r = read_mesh_bytes(&bytes, Some(format), Path::new("test"), &limits);
+        assert!(matches!(r, Err(MeshError::Cancelled)), "{format:?}: {r:?}");
+    }
 }

@@ -47,7 +47,7 @@ fn mutate(bytes: &[u8], rng: &mut SplitMix64) -> Vec<u8> {
 fn mutated_files_never_panic_any_reader() {
     let mesh = procedural::bumpy_blob(8, 12, 1);
     let mut rng = SplitMix64::new(42);
-    let limits = ReadLimits { max_vertices: 100_000, max_faces: 100_000 };
+    let limits = ReadLimits { max_vertices: 100_000, max_faces: 100_000, cancel: None };
     for format in [MeshFormat::Obj, MeshFormat::Ply] {
         let mut bytes = Vec::new();
         write_mesh_to(&mut bytes, &mesh, format).unwrap();

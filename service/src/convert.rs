@@ -4,6 +4,8 @@
 //! point at the exact value: `input.mesh.indices[7]: vertex 912 out of range (300 vertices)`.
 
 use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
 
 use meshlod_engine::io::{MeshFormat, ReadLimits, read_mesh_bytes};
 use meshlod_engine::pm::{NO_VERTEX, ProgressiveMesh, StreamedSplit, VertexSplit};
@@ -59,8 +61,14 @@ pub fn engine_status(error: MeshError, options_field: &str) -> Status {
     }
 }
 
-/// Reads the mesh of a request, checking sizes, indices and coordinates.
-pub fn mesh_from_input(input: Option<&proto::MeshInput>, field: &str, limits: &MeshLimits) -> Result<Mesh, Status> {
+/// Reads the mesh of a request, checking sizes, indices and coordinates; an encoded file's read
+/// stops when `cancel` is raised.
+pub fn mesh_from_input(
+    input: Option<&proto::MeshInput>,
+    field: &str,
+    limits: &MeshLimits,
+    cancel: Option<Arc<AtomicBool>>,
+) -> Result<Mesh, Status> {
     let source =
         input.and_then(|i| i.source.as_ref()).ok_or_else(|| invalid(field, "missing: give a mesh or a file"))?;
     match source {
@@ -75,9 +83,12 @@ pub fn mesh_from_input(input: Option<&proto::MeshInput>, field: &str, limits: &M
                 }
             };
             let read_limits =
-                ReadLimits { max_vertices: limits.max_vertices as u64, max_faces: limits.max_faces as u64 };
-            let mesh = read_mesh_bytes(&file.data, format, Path::new("request"), &read_limits)
-                .map_err(|e| invalid(format!("{field}.file"), e.to_string()))?;
+                ReadLimits { max_vertices: limits.max_vertices as u64, max_faces: limits.max_faces as u64, cancel };
+            let mesh =
+                read_mesh_bytes(&file.data, format, Path::new("request"), &read_limits).map_err(|e| match e {
+                    MeshError::Cancelled => Status::cancelled("request cancelled"),
+                    e => invalid(format!("{field}.file"), e.to_string()),
+                })?;
             if mesh.triangles.is_empty() {
                 return Err(invalid(format!("{field}.file"), "the mesh has no faces"));
             }

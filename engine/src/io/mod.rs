@@ -57,24 +57,37 @@ impl MeshFormat {
     }
 }
 
-/// Limits that protect a reader from files that claim (or contain) absurd amounts of data.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Limits that protect a reader from files that claim (or contain) absurd amounts of data, and
+/// the flag that stops a read.
+#[derive(Debug, Clone)]
 pub struct ReadLimits {
     /// Largest number of vertices accepted.
     pub max_vertices: u64,
     /// Largest number of triangles accepted (after triangulating polygons).
     pub max_faces: u64,
+    /// Set to `true` by another thread to stop the read: [`MeshError::Cancelled`]. Read at every
+    /// vertex and face (a relaxed load).
+    pub cancel: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
 impl Default for ReadLimits {
     /// 50 million vertices and 100 million triangles: about 2.4 GB of mesh in memory.
     fn default() -> Self {
-        ReadLimits { max_vertices: 50_000_000, max_faces: 100_000_000 }
+        ReadLimits { max_vertices: 50_000_000, max_faces: 100_000_000, cancel: None }
     }
 }
 
 impl ReadLimits {
+    /// [`MeshError::Cancelled`] once the cancel flag is raised.
+    pub(crate) fn check_cancel(&self) -> Result<(), MeshError> {
+        match &self.cancel {
+            Some(flag) if flag.load(std::sync::atomic::Ordering::Relaxed) => Err(MeshError::Cancelled),
+            _ => Ok(()),
+        }
+    }
+
     pub(crate) fn check_vertices(&self, count: u64) -> Result<(), MeshError> {
+        self.check_cancel()?;
         if count > self.max_vertices {
             return Err(MeshError::TooLarge { what: "vertices", count, limit: self.max_vertices });
         }
@@ -82,6 +95,7 @@ impl ReadLimits {
     }
 
     pub(crate) fn check_faces(&self, count: u64) -> Result<(), MeshError> {
+        self.check_cancel()?;
         if count > self.max_faces {
             return Err(MeshError::TooLarge { what: "faces", count, limit: self.max_faces });
         }

@@ -338,6 +338,7 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
             None
         };
         for i in 0..element.count {
+            limits.check_cancel()?;
             let loc = |k: u64| format!("{} {k}", element.name);
             let mut xyz = [0f64; 3];
             let mut indices: Vec<i64> = Vec::new();

@@ -105,7 +105,7 @@ impl MeshLodService {
         let limits = self.config.limits;
         let predictor = self.config.predictor.clone();
         move |cancel| {
-            let mesh = mesh_from_input(request.input.as_ref(), "input", &limits)?;
+            let mesh = mesh_from_input(request.input.as_ref(), "input", &limits, Some(cancel.clone()))?;
             let mut options = request.options.unwrap_or_default();
             options.return_progressive |= progressive;
             jobs::simplify(&mesh, &options, predictor.as_deref(), Some(cancel))
@@ -233,7 +233,7 @@ impl MeshLod for MeshLodService {
         let limits = self.config.limits;
         let response = self
             .run("Refine", deadline, move |cancel| {
-                let mesh = mesh_from_input(request.input.as_ref(), "input", &limits)?;
+                let mesh = mesh_from_input(request.input.as_ref(), "input", &limits, Some(cancel.clone()))?;
                 let (result, stats) =
                     jobs::refine(&mesh, &request, predictor.as_deref(), Some(cancel), limits.max_faces)?;
                 Ok(proto::RefineResponse { mesh: Some(mesh_to_proto(&result.mesh)), stats: Some(stats) })
@@ -252,8 +252,8 @@ impl MeshLod for MeshLodService {
         let report = self
             .run("Hausdorff", deadline, move |cancel| {
                 let mut options = convert::hausdorff_options(request.tolerance, request.samples)?;
-                let a = mesh_from_input(request.a.as_ref(), "a", &limits)?;
-                let b = mesh_from_input(request.b.as_ref(), "b", &limits)?;
+                let a = mesh_from_input(request.a.as_ref(), "a", &limits, Some(cancel.clone()))?;
+                let b = mesh_from_input(request.b.as_ref(), "b", &limits, Some(cancel.clone()))?;
                 options.cancel = Some(cancel);
                 // Each mesh checked on its own, so that the error names its field.
                 for (mesh, field) in [(&a, "a"), (&b, "b")] {
@@ -278,11 +278,11 @@ impl MeshLod for MeshLodService {
             return Err(Status::failed_precondition("this server runs without a predictor model"));
         };
         let response = self
-            .run("Predict", deadline, move |_cancel| {
+            .run("Predict", deadline, move |cancel| {
                 let subject = request.subject.as_ref().ok_or_else(|| Status::invalid_argument("subject: missing"))?;
                 match subject {
                     proto::predict_request::Subject::Input(input) => {
-                        let mesh = mesh_from_input(Some(input), "input", &limits)?;
+                        let mesh = mesh_from_input(Some(input), "input", &limits, Some(cancel.clone()))?;
                         jobs::predict_mesh(&predictor, &mesh, request.target_faces, request.target_ratio)
                     }
                     proto::predict_request::Subject::Features(f) => {
