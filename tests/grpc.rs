@@ -2,9 +2,12 @@
 //! progressive mesh, field-level errors, admission limits, cancellation, health, reflection,
 //! bearer tokens.
 
+mod common;
+
 use std::net::SocketAddr;
 use std::time::{Duration, Instant};
 
+use common::{gauge, scrape};
 use meshlod_engine::pm::ProgressiveMesh;
 use meshlod_engine::simplify::{SimplifyOptions, simplify};
 use meshlod_engine::{Mesh, procedural};
@@ -439,21 +442,8 @@ fn long_request() -> proto::SimplifyRequest {
     simplify_request(&procedural::bumpy_blob(700, 1400, 1), 0.99)
 }
 
-fn scrape(metrics: SocketAddr) -> String {
-    use std::io::{Read, Write};
-    let mut s = std::net::TcpStream::connect(metrics).unwrap();
-    s.write_all(b"GET /metrics HTTP/1.1\r\nhost: x\r\n\r\n").unwrap();
-    let mut text = String::new();
-    s.read_to_string(&mut text).unwrap();
-    text
-}
-
-fn gauge(metrics: SocketAddr, name: &str) -> i64 {
-    scrape(metrics).lines().find_map(|l| l.strip_prefix(&format!("{name} "))).unwrap().trim().parse().unwrap()
-}
-
 fn in_flight(metrics: SocketAddr) -> i64 {
-    gauge(metrics, "meshlod_in_flight")
+    gauge(&scrape(metrics), "meshlod_in_flight")
 }
 
 fn requests(metrics: SocketAddr, method: &str, code: &str) -> u64 {
@@ -499,7 +489,7 @@ async fn busy_server_refuses_and_cancelled_work_stops() {
     .expect("refused without waiting for the stream to end")
     .unwrap_err();
     assert_eq!(upload.code(), Code::ResourceExhausted, "{upload:?}");
-    assert_eq!(gauge(metrics, "meshlod_queue_depth"), 0);
+    assert_eq!(gauge(&scrape(metrics), "meshlod_queue_depth"), 0);
     drop(tx);
     // The deadline passes: the call fails and the server's worker stops instead of finishing.
     let result = running.await.unwrap();

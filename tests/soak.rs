@@ -5,11 +5,14 @@
 //! gauges back to 0 at the end; peak memory of the process under a stated bound. The figures are
 //! printed for docs/reliability.md.
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use common::{gauge, scrape};
 use meshlod_engine::procedural;
 use meshlod_engine::simplify::{SimplifyOptions, simplify};
 use meshlod_service::convert::{MeshLimits, mesh_to_proto};
@@ -27,19 +30,6 @@ fn peak_rss_mb() -> f64 {
         .find_map(|l| l.strip_prefix("VmHWM:"))
         .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
         .map_or(0.0, |kb| kb / 1024.0)
-}
-
-fn scrape(addr: std::net::SocketAddr) -> String {
-    use std::io::{Read, Write};
-    let mut s = std::net::TcpStream::connect(addr).unwrap();
-    s.write_all(b"GET /metrics HTTP/1.1\r\nhost: x\r\n\r\n").unwrap();
-    let mut text = String::new();
-    s.read_to_string(&mut text).unwrap();
-    text
-}
-
-fn gauge(text: &str, name: &str) -> i64 {
-    text.lines().find_map(|l| l.strip_prefix(&format!("{name} "))).unwrap().trim().parse().unwrap()
 }
 
 fn request(mesh: &meshlod_engine::Mesh, ratio: f64) -> proto::SimplifyRequest {

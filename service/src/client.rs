@@ -6,13 +6,12 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::{Context, Result};
-use meshlod_engine::io::read_mesh;
 use tonic::codec::CompressionEncoding;
 use tonic::transport::{Channel, Endpoint};
 
 use crate::convert::{MeshLimits, mesh_from_proto, mesh_to_proto, progressive_from_proto};
 use crate::executor::{
-    Executor, PredictJob, RefineJob, SimplifyJob, check_simplify_outputs, finish_refine, finish_simplify,
+    Executor, PredictJob, RefineJob, SimplifyJob, check_simplify_outputs, finish_refine, finish_simplify, load,
 };
 use crate::proto;
 use crate::proto::mesh_lod_client::MeshLodClient;
@@ -121,7 +120,7 @@ fn status_error(status: tonic::Status) -> anyhow::Error {
 impl Executor for Remote {
     fn simplify(&self, job: &SimplifyJob) -> Result<Report> {
         check_simplify_outputs(job)?;
-        let mesh = read_mesh(&job.input)?;
+        let mesh = load(&job.input)?;
         let options = proto::SimplifyOptions { return_progressive: job.pm.is_some(), ..job.options };
         let mut client = self.client.clone();
         let response = self.runtime.block_on(async {
@@ -153,7 +152,7 @@ impl Executor for Remote {
 
     fn refine(&self, job: &RefineJob) -> Result<Report> {
         meshlod_engine::io::output_format(&job.output)?;
-        let mesh = read_mesh(&job.input)?;
+        let mesh = load(&job.input)?;
         let request = proto::RefineRequest { input: Some(input_of(&mesh)), ..job.request.clone() };
         let mut client = self.client.clone();
         let response = self
@@ -166,7 +165,7 @@ impl Executor for Remote {
     }
 
     fn predict(&self, job: &PredictJob) -> Result<Report> {
-        let mesh = read_mesh(&job.input)?;
+        let mesh = load(&job.input)?;
         let request = proto::PredictRequest {
             subject: Some(proto::predict_request::Subject::Input(input_of(&mesh))),
             target_faces: job.target_faces,

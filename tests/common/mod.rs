@@ -81,3 +81,18 @@ impl Drop for Server {
         let _ = self.child.wait();
     }
 }
+
+/// The Prometheus text of a server's metrics endpoint.
+pub fn scrape(metrics: std::net::SocketAddr) -> String {
+    use std::io::{Read, Write};
+    let mut s = std::net::TcpStream::connect(metrics).unwrap();
+    s.write_all(b"GET /metrics HTTP/1.1\r\nhost: x\r\n\r\n").unwrap();
+    let mut text = String::new();
+    s.read_to_string(&mut text).unwrap();
+    text
+}
+
+/// A gauge's value in scraped metrics text.
+pub fn gauge(text: &str, name: &str) -> i64 {
+    text.lines().find_map(|l| l.strip_prefix(&format!("{name} "))).unwrap().trim().parse().unwrap()
+}

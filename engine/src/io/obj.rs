@@ -139,7 +139,7 @@ pub fn read_obj(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
                         ),
                     ));
                 }
-                // The face count is checked before the polygon is triangulated.
+                // Checked before triangulating: n corners always make n − 2 triangles.
                 limits.check_faces((triangles.len() + polygon.len() - 2) as u64)?;
                 local_triangles.clear();
                 if polygon.len() == 3 {
@@ -158,7 +158,6 @@ pub fn read_obj(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
                     }));
                     triangulate_polygon(&polygon_points, &mut local_triangles);
                 }
-                limits.check_faces((triangles.len() + local_triangles.len()) as u64)?;
                 for t in &local_triangles {
                     let mut tri = [0u32; 3];
                     for (slot, &k) in tri.iter_mut().zip(t) {

@@ -411,7 +411,7 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
                 format!("has {} corners; at most {} are accepted", indices.len(), super::MAX_POLYGON_CORNERS),
             ));
         }
-        // The face count is checked before the polygon is triangulated.
+        // Checked before triangulating: n corners always make n − 2 triangles.
         limits.check_faces((triangles.len() + indices.len().saturating_sub(2)) as u64)?;
         local.clear();
         if indices.len() == 3 {
@@ -424,7 +424,6 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
             }));
             triangulate_polygon(&points, &mut local);
         }
-        limits.check_faces((triangles.len() + local.len()) as u64)?;
         triangles.extend(local.iter().map(|t| [indices[t[0]] as u32, indices[t[1]] as u32, indices[t[2]] as u32]));
     }
     Mesh::new(positions, triangles)

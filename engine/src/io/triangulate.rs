@@ -80,10 +80,7 @@ fn is_small_ear(flat: &[DVec2], [a, b, c]: [usize; 3], remaining: &[usize]) -> b
     if cross(pa, pb, pc) <= 0.0 {
         return false; // reflex or degenerate corner
     }
-    remaining.iter().filter(|&&i| i != a && i != b && i != c).all(|&i| {
-        let p = flat[i];
-        !(cross(pa, pb, p) >= 0.0 && cross(pb, pc, p) >= 0.0 && cross(pc, pa, p) >= 0.0)
-    })
+    remaining.iter().filter(|&&i| i != a && i != b && i != c).all(|&i| !in_triangle(pa, pb, pc, flat[i]))
 }
 
 /// Triangles (c₀, cᵢ, cᵢ₊₁) over the corners in order.
@@ -96,6 +93,11 @@ fn fan(corners: impl Iterator<Item = usize>, out: &mut Vec<[usize; 3]>) {
 
 fn cross(o: DVec2, a: DVec2, b: DVec2) -> f64 {
     (a - o).perp_dot(b - o)
+}
+
+/// Whether `p` lies inside the counter-clockwise triangle (a, b, c) or on its border.
+fn in_triangle(a: DVec2, b: DVec2, c: DVec2, p: DVec2) -> bool {
+    cross(a, b, p) >= 0.0 && cross(b, c, p) >= 0.0 && cross(c, a, p) >= 0.0
 }
 
 /// Whether every corner turns left (the Newell normal makes the polygon counter-clockwise) and the
@@ -202,12 +204,7 @@ impl<'a> EarClipper<'a> {
                 continue;
             }
             let p = self.flat[i];
-            if p.cmpge(lo).all()
-                && p.cmple(hi).all()
-                && cross(pa, pb, p) >= 0.0
-                && cross(pb, pc, p) >= 0.0
-                && cross(pc, pa, p) >= 0.0
-            {
+            if p.cmpge(lo).all() && p.cmple(hi).all() && in_triangle(pa, pb, pc, p) {
                 return false;
             }
         }

@@ -270,11 +270,6 @@ impl SimplifyOptions {
         let usable = mesh.triangles.iter().filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]).count();
         self.face_target(usable)
     }
-
-    /// The fraction of `faces` that [`SimplifyOptions::face_target`] removes.
-    pub fn effective_ratio(&self, faces: usize) -> f64 {
-        if faces == 0 { 0.0 } else { 1.0 - self.face_target(faces).min(faces) as f64 / faces as f64 }
-    }
 }
 
 /// Candidates refused at the top of the queue, by legality rule (module doc, rules 3–6).
