@@ -25,6 +25,15 @@ struct Node {
     count: u32,
 }
 
+/// A triangle while the tree is built: its centroid (the split key), box and face.
+#[derive(Debug, Clone, Copy)]
+struct Item {
+    centroid: [f64; 3],
+    min: [f32; 3],
+    max: [f32; 3],
+    face: u32,
+}
+
 /// Closest-point acceleration structure over a mesh's (non-degenerate-index) triangles.
 #[derive(Debug, Clone)]
 pub struct TriangleBvh {
@@ -64,10 +73,15 @@ impl TriangleBvh {
         if mesh.triangles.is_empty() {
             return None;
         }
-        let mut items: Vec<(DVec3, u32)> = (0..mesh.face_count())
+        // Each triangle's box and centroid once, so that building reads them in sequence rather
+        // than gathering every triangle's corners again at every level.
+        let mut items: Vec<Item> = (0..mesh.face_count())
             .map(|f| {
-                let [a, b, c] = mesh.triangle_points(f);
-                ((a + b + c) / 3.0, f as u32)
+                let corners = mesh.triangles[f].map(|v| mesh.positions[v as usize]);
+                let [a, b, c] = corners.map(widen);
+                let min = [0, 1, 2].map(|k| corners[0][k].min(corners[1][k]).min(corners[2][k]));
+                let max = [0, 1, 2].map(|k| corners[0][k].max(corners[1][k]).max(corners[2][k]));
+                Item { centroid: ((a + b + c) / 3.0).to_array(), min, max, face: f as u32 }
             })
             .collect();
         let mut bvh = TriangleBvh {
@@ -79,24 +93,21 @@ impl TriangleBvh {
         Some(bvh)
     }
 
-    fn build(&mut self, mesh: &Mesh, items: &mut [(DVec3, u32)]) -> u32 {
+    fn build(&mut self, mesh: &Mesh, items: &mut [Item]) -> u32 {
         let mut min = [f32::INFINITY; 3];
         let mut max = [f32::NEG_INFINITY; 3];
-        for &(_, f) in items.iter() {
-            for v in mesh.triangles[f as usize] {
-                let p = mesh.positions[v as usize];
-                for k in 0..3 {
-                    min[k] = min[k].min(p[k]);
-                    max[k] = max[k].max(p[k]);
-                }
+        for item in items.iter() {
+            for k in 0..3 {
+                min[k] = min[k].min(item.min[k]);
+                max[k] = max[k].max(item.max[k]);
             }
         }
         let index = self.nodes.len() as u32;
         if items.len() <= LEAF_SIZE {
             let start = self.corners.len() as u32;
-            for &(_, f) in items.iter() {
-                self.corners.push(mesh.triangles[f as usize].map(|v| mesh.positions[v as usize]));
-                self.faces.push(f);
+            for item in items.iter() {
+                self.corners.push(mesh.triangles[item.face as usize].map(|v| mesh.positions[v as usize]));
+                self.faces.push(item.face);
             }
             self.nodes.push(Node { min, max, start_or_right: start, count: items.len() as u32 });
             return index;
@@ -104,7 +115,7 @@ impl TriangleBvh {
         self.nodes.push(Node { min, max, start_or_right: 0, count: 0 });
         let axis = (widen(max) - widen(min)).max_position();
         let mid = items.len() / 2;
-        items.select_nth_unstable_by(mid, |a, b| a.0[axis].total_cmp(&b.0[axis]));
+        items.select_nth_unstable_by(mid, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
         let (left, right) = items.split_at_mut(mid);
         self.build(mesh, left);
         let right_index = self.build(mesh, right);
@@ -211,14 +222,19 @@ impl TriangleBvh {
             let p = closest_point_on_triangle(query, a, b, c);
             best = ClosestPoint { distance_squared: (p - query).length_squared(), point: p, slot };
         }
-        let mut stack: [u32; 64] = [0; 64];
+        // Each entry carries its box's distance, computed when it was pushed: a node is searched
+        // only if that is still below the best distance when it is popped.
+        let root = self.nodes[0];
+        let mut stack: [(u32, f64); 64] = [(0, 0.0); 64];
+        stack[0] = (0, box_distance_squared(query, root.min, root.max));
         let mut depth = 1;
         while depth > 0 {
             depth -= 1;
-            let node = self.nodes[stack[depth] as usize];
-            if box_distance_squared(query, node.min, node.max) >= best.distance_squared {
+            let (index, distance) = stack[depth];
+            if distance >= best.distance_squared {
                 continue;
             }
+            let node = self.nodes[index as usize];
             if node.count > 0 {
                 let start = node.start_or_right as usize;
                 for slot in start..start + node.count as usize {
@@ -231,7 +247,7 @@ impl TriangleBvh {
                 }
                 continue;
             }
-            let left = stack[depth] + 1;
+            let left = index + 1;
             let right = node.start_or_right;
             let dl = {
                 let n = self.nodes[left as usize];
@@ -243,10 +259,15 @@ impl TriangleBvh {
             };
             // Push the farther child first so the nearer one is searched first. The median split
             // keeps the depth at ~log2(n / LEAF_SIZE), far below the stack size.
-            let (near, far) = if dl <= dr { (left, right) } else { (right, left) };
-            stack[depth] = far;
-            stack[depth + 1] = near;
-            depth += 2;
+            let (near, far) = if dl <= dr { ((left, dl), (right, dr)) } else { ((right, dr), (left, dl)) };
+            if far.1 < best.distance_squared {
+                stack[depth] = far;
+                depth += 1;
+            }
+            if near.1 < best.distance_squared {
+                stack[depth] = near;
+                depth += 1;
+            }
         }
         best
     }

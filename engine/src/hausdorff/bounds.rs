@@ -300,6 +300,14 @@ pub(crate) fn directed_bounds(
                     sequence: f as u64,
                 };
                 (piece.upper, piece.best) = bound(b, &piece, &[], lower);
+                // First the cheap question: is the piece within the threshold? (A thin prism
+                // holds few of B's triangles.)
+                if piece.upper > start
+                    && let Some(upper) = patch_bound(b, &piece.corners, start, None, scratch)
+                {
+                    piece.upper = upper;
+                }
+                // If not, its centroid (which may raise L) and its bound at its own limit.
                 if piece.upper > start {
                     let centroid = (piece.corners[0] + piece.corners[1] + piece.corners[2]) / 3.0;
                     let (d, slot) = evaluate(b, centroid, piece.best[0]);
@@ -309,8 +317,8 @@ pub(crate) fn directed_bounds(
                     if upper < piece.upper {
                         (piece.upper, piece.best) = (upper, best);
                     }
+                    tighten(b, &mut piece, start, None, scratch);
                 }
-                tighten(b, &mut piece, start, None, scratch);
                 found.offer(piece, start);
             }
             Some(found)

@@ -87,6 +87,45 @@ fn strictly_in_triangle(p: DVec2, [a, b, c]: [DVec2; 3]) -> bool {
     cross(a, b, p) > 0.0 && cross(b, c, p) > 0.0 && cross(c, a, p) > 0.0
 }
 
+/// Largest |height| of the affine function with `heights` at the corners of the projected triangle
+/// `t` (counter-clockwise, twice its area `area`) over the part of `t` inside the counter-clockwise
+/// triangle `piece`: |affine| is convex, so that is reached at a corner of the overlap polygon
+/// (`t` clipped by the piece's three edge lines). Infinite when the overlap comes out empty (a
+/// touch, lost to rounding): the caller's other bounds stand then.
+fn overlap_height(piece: &[DVec2; 3], t: &[DVec2; 3], heights: &[f64; 3], area: f64) -> f64 {
+    // At most 3 + 3 corners after three clips.
+    let mut polygon = [DVec2::ZERO; 9];
+    let mut clipped = [DVec2::ZERO; 9];
+    polygon[..3].copy_from_slice(t);
+    let mut count = 3;
+    for k in 0..3 {
+        let (a, b) = (piece[k], piece[(k + 1) % 3]);
+        let side = |p: DVec2| cross(a, b, p);
+        let mut kept = 0;
+        for i in 0..count {
+            let (p, q) = (polygon[i], polygon[(i + 1) % count]);
+            let (sp, sq) = (side(p), side(q));
+            if sp >= 0.0 {
+                clipped[kept] = p;
+                kept += 1;
+            }
+            if (sp >= 0.0) != (sq >= 0.0) && kept < clipped.len() {
+                clipped[kept] = p + (q - p) * (sp / (sp - sq));
+                kept += 1;
+            }
+        }
+        count = kept.min(polygon.len());
+        polygon[..count].copy_from_slice(&clipped[..count]);
+        if count == 0 {
+            return f64::INFINITY;
+        }
+    }
+    polygon[..count].iter().fold(0f64, |m, &x| {
+        let w = [cross(t[1], t[2], x), cross(t[2], t[0], x), cross(t[0], t[1], x)];
+        m.max(((w[0] * heights[0] + w[1] * heights[1] + w[2] * heights[2]) / area).abs())
+    })
+}
+
 /// The unit normal of a piece, if it has area.
 fn unit_normal([c0, c1, c2]: &[DVec3; 3]) -> Option<DVec3> {
     let normal = (*c1 - *c0).cross(*c2 - *c0);
@@ -104,7 +143,8 @@ pub(crate) fn query(bvh: &TriangleBvh, corners: &[DVec3; 3], limit: f64, out: &m
     // Only triangles within `limit` of T's plane over T's footprint matter: the box of the prism
     // T ± limit · n holds every one whose projection meets T's.
     let lift = (n * limit).abs();
-    bvh.slots_in_box(c0.min(c1).min(c2) - lift, c0.max(c1).max(c2) + lift, (n, n.dot(c0), limit), MAX_QUERY, out)
+    let (lo, hi) = (c0.min(c1).min(c2) - lift, c0.max(c1).max(c2) + lift);
+    bvh.slots_in_box(lo, hi, (n, n.dot(c0), limit), MAX_QUERY, out)
 }
 
 /// The patch bound of the piece with `corners`, using B's triangles whose heights above the
@@ -169,7 +209,13 @@ pub(crate) fn patch_bound(
             let w = [cross(p2[1], p2[2], x), cross(p2[2], p2[0], x), cross(p2[0], p2[1], x)];
             m.max(((w[0] * heights[0] + w[1] * heights[1] + w[2] * heights[2]) / area).abs())
         });
-        let height = at_vertices.min(at_corners);
+        // Tighter still, its height over the overlap of the two projections; computed only when
+        // the cheaper bounds would raise the largest so far or drop the triangle, since otherwise
+        // it changes neither the bound nor what is kept.
+        let mut height = at_vertices.min(at_corners);
+        if height > bound.max(0.0) || height >= limit {
+            height = height.min(overlap_height(&t2, &p2, &heights, area));
+        }
         if height.partial_cmp(&limit) != Some(std::cmp::Ordering::Less) {
             continue;
         }
@@ -247,6 +293,24 @@ mod tests {
         // Reaching past the grid's border: not covered.
         let outside = [DVec3::new(0.5, 0.5, 0.25), DVec3::new(1.2, 0.5, 0.25), DVec3::new(0.5, 0.9, 0.25)];
         assert_eq!(patch_bound(&bvh, &outside, 0.5, None, &mut Scratch::default()), None);
+    }
+
+    #[test]
+    fn the_bound_over_a_curved_surface_is_the_height_over_the_piece_itself() {
+        // z = x² on a 40 × 40 grid over [−1, 1]²; a piece in the plane z = −0.1, below it. Triangles along the
+        // piece's border reach beyond it, where the surface is farther: only their part over the
+        // piece may count. The height over the piece, x² + 0.1, is convex: largest at a corner
+        // (plus the grid's chord error, below 0.05² / 4).
+        let mut grid = plane_grid(40, 0.0);
+        for p in &mut grid.positions {
+            let (x, y) = (p[0] * 2.0 - 1.0, p[1] * 2.0 - 1.0);
+            *p = [x, y, x * x];
+        }
+        let bvh = TriangleBvh::new(&grid).unwrap();
+        let corners = [DVec3::new(-0.45, -0.4, -0.1), DVec3::new(0.5, -0.3, -0.1), DVec3::new(0.05, 0.45, -0.1)];
+        let bound = patch_bound(&bvh, &corners, 1.0, None, &mut Scratch::default()).unwrap();
+        let exact = corners.iter().map(|c| c.x * c.x + 0.1).fold(0f64, f64::max);
+        assert!(bound >= exact - 1e-9 && bound <= exact + 0.05f64.powi(2) / 4.0 + 1e-6, "{bound} vs {exact}");
     }
 
     #[test]
