@@ -20,5 +20,6 @@ cargo build --release --locked --bin meshlod
 mkdir -p training/data
 target/release/meshlod samples --meshes "$meshes" --out training/data/samples.csv --per-mesh "$per_mesh"
 .venv-train/bin/python training/train.py --samples training/data/samples.csv --out predictor/model
+.venv-train/bin/python training/report.py --model predictor/model --samples training/data/samples.csv
 cargo test --release --locked -p meshlod-predictor
 echo "retrained: see predictor/model/metadata.json for the evaluation"
