@@ -286,3 +286,51 @@ fn batch_runs_jobs_reports_each_and_resumes() {
     let text = std::fs::read_to_string(&results).unwrap();
     assert!(text.contains("\"status\":\"error\"") && text.contains("missing.obj"), "{text}");
 }
+
+#[test]
+fn stl_and_off_inputs_are_read_and_outputs_are_refused() {
+    let dir = tempdir("stl-off");
+    let obj = dir.join("torus.obj");
+    assert!(meshlod(&["generate", "torus", "-o", s(&obj), "--resolution", "12"]).status.success());
+    let mesh = meshlod_engine::io::read_mesh(&obj).unwrap();
+    // Binary STL: a facet soup, which the reader welds back into the torus.
+    let mut stl = vec![0u8; 80];
+    stl.extend_from_slice(&(mesh.face_count() as u32).to_le_bytes());
+    for t in &mesh.triangles {
+        stl.extend_from_slice(&[0u8; 12]);
+        for &v in t {
+            for c in mesh.positions[v as usize] {
+                stl.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        stl.extend_from_slice(&[0, 0]);
+    }
+    let stl_path = dir.join("torus.stl");
+    std::fs::write(&stl_path, &stl).unwrap();
+    let mut off = format!("OFF\n{} {} 0\n", mesh.vertex_count(), mesh.face_count());
+    for p in &mesh.positions {
+        off += &format!("{} {} {}\n", p[0], p[1], p[2]);
+    }
+    for t in &mesh.triangles {
+        off += &format!("3 {} {} {}\n", t[0], t[1], t[2]);
+    }
+    let off_path = dir.join("torus.off");
+    std::fs::write(&off_path, off).unwrap();
+
+    for input in [&stl_path, &off_path] {
+        let info = ok_json(&["info", s(input), "--json"]);
+        assert_eq!(
+            (info["vertices"].as_u64(), info["faces"].as_u64()),
+            (Some(mesh.vertex_count() as u64), Some(mesh.face_count() as u64))
+        );
+        assert_eq!(info["boundary_loops"], 0, "{input:?} was not welded into a closed torus");
+        let same = ok_json(&["hausdorff", s(&obj), s(input), "--json"]);
+        assert_eq!(same["hausdorff_paper"], 0.0);
+        let out = dir.join("lod.ply");
+        let report = ok_json(&["simplify", s(input), "-o", s(&out), "--ratio", "0.5", "--json"]);
+        assert!(report["faces_out"].as_u64().unwrap() <= mesh.face_count() as u64 / 2 + 1, "{report}");
+    }
+    fails_with(&["convert", s(&obj), s(&dir.join("out.stl"))], "STL and OFF are read only");
+    std::fs::write(dir.join("lying.stl"), &stl[..stl.len() - 7]).unwrap();
+    fails_with(&["info", s(&dir.join("lying.stl"))], "header counts");
+}

@@ -1,4 +1,4 @@
-//! Mutation fuzzing on stable Rust, deterministic and bounded: the OBJ, PLY and `.pm` readers on
+//! Mutation fuzzing on stable Rust, deterministic and bounded: the OBJ, PLY, STL, OFF and `.pm` readers on
 //! mutations of the committed seed corpus (`tests/fuzz-corpus/`), and the simplify → progressive
 //! mesh → level pipeline on arbitrary small meshes. Every input must end in a value or a clear
 //! error: no panic, and every mesh that comes back passes its own check.
@@ -139,7 +139,8 @@ fn readers_survive_mutated_files() {
             }
             continue;
         }
-        for format in [Some(MeshFormat::Obj), Some(MeshFormat::Ply), None] {
+        for format in [Some(MeshFormat::Obj), Some(MeshFormat::Ply), Some(MeshFormat::Stl), Some(MeshFormat::Off), None]
+        {
             let result =
                 no_panic("read", seed, case, &input, || read_mesh_bytes(&input, format, Path::new("fuzz"), &limits()));
             match result {

@@ -77,6 +77,8 @@ pub fn mesh_from_input(
             let format = match proto::MeshFormat::try_from(file.format) {
                 Ok(proto::MeshFormat::Obj) => Some(MeshFormat::Obj),
                 Ok(proto::MeshFormat::Ply) => Some(MeshFormat::Ply),
+                Ok(proto::MeshFormat::Stl) => Some(MeshFormat::Stl),
+                Ok(proto::MeshFormat::Off) => Some(MeshFormat::Off),
                 Ok(proto::MeshFormat::Unspecified) => None,
                 Err(_) => {
                     return Err(invalid(format!("{field}.file.format"), format!("unknown format {}", file.format)));

@@ -53,13 +53,13 @@ fn mesh_files(dir: &Path, only: &[String]) -> Result<Vec<(String, PathBuf)>> {
     let mut files: Vec<(String, PathBuf)> = std::fs::read_dir(dir)
         .with_context(|| format!("reading {}", dir.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| matches!(p.extension().and_then(|e| e.to_str()), Some("obj" | "ply")))
+        .filter(|p| meshlod_engine::io::MeshFormat::from_extension(p).is_some())
         .map(|p| (p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(), p))
         .filter(|(name, _)| only.is_empty() || only.contains(name))
         .collect();
     files.sort();
     if files.is_empty() {
-        bail!("no .obj or .ply meshes in {}", dir.display());
+        bail!("no .obj, .ply, .stl or .off meshes in {}", dir.display());
     }
     Ok(files)
 }

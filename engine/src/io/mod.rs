@@ -1,11 +1,14 @@
-//! Reading and writing meshes: OBJ and PLY (ascii, binary little and big endian).
+//! Reading and writing meshes: OBJ and PLY (ascii, binary little and big endian) in and out; STL
+//! (binary and ascii) and OFF (ascii) in.
 //!
 //! Readers treat every file as untrusted: nothing is allocated from a header count before the data
 //! that backs it has been seen, every index is range-checked, every coordinate must be finite, and
 //! errors name the file and the line, byte or element at fault.
 
 mod obj;
+mod off;
 mod ply;
+mod stl;
 mod triangulate;
 
 /// Most corners one polygon of a file may have (its triangulation costs linear work whatever its
@@ -19,7 +22,9 @@ use crate::error::MeshError;
 use crate::mesh::Mesh;
 
 pub use obj::{read_obj, write_obj};
+pub use off::read_off;
 pub use ply::{read_ply, write_ply};
+pub use stl::read_stl;
 
 /// Mesh file formats meshlod reads and writes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -28,6 +33,10 @@ pub enum MeshFormat {
     Obj,
     /// Stanford PLY (ascii or binary; written as binary little endian).
     Ply,
+    /// STL, binary or ascii (read only): facets welded by position.
+    Stl,
+    /// Object File Format, ascii (read only).
+    Off,
 }
 
 impl MeshFormat {
@@ -37,14 +46,28 @@ impl MeshFormat {
         match ext.as_str() {
             "obj" => Some(MeshFormat::Obj),
             "ply" => Some(MeshFormat::Ply),
+            "stl" => Some(MeshFormat::Stl),
+            "off" => Some(MeshFormat::Off),
             _ => None,
         }
     }
 
-    /// Format recognised from the first bytes of a file: PLY has a magic line, OBJ is text.
+    /// Whether meshlod can write this format (STL and OFF are read only).
+    pub fn writable(self) -> bool {
+        matches!(self, MeshFormat::Obj | MeshFormat::Ply)
+    }
+
+    /// Format recognised from a file's bytes: PLY and OFF have a magic word, binary STL a size
+    /// that matches its facet count, ascii STL begins with `solid`, OBJ is text.
     pub fn sniff(bytes: &[u8]) -> Option<MeshFormat> {
         if bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n") {
             return Some(MeshFormat::Ply);
+        }
+        if off::is_off(bytes) {
+            return Some(MeshFormat::Off);
+        }
+        if stl::is_binary(bytes) || stl::is_ascii(bytes) {
+            return Some(MeshFormat::Stl);
         }
         let head = &bytes[..bytes.len().min(4096)];
         let is_text =
@@ -116,11 +139,13 @@ pub fn read_mesh_bytes(
 ) -> Result<Mesh, MeshError> {
     let format = format.or_else(|| MeshFormat::sniff(bytes)).ok_or_else(|| MeshError::UnsupportedFormat {
         path: name.to_path_buf(),
-        reason: "neither the extension nor the content says OBJ or PLY".into(),
+        reason: "neither the extension nor the content says OBJ, PLY, STL or OFF".into(),
     })?;
     match format {
         MeshFormat::Obj => read_obj(bytes, name, limits),
         MeshFormat::Ply => read_ply(bytes, name, limits),
+        MeshFormat::Stl => read_stl(bytes, name, limits),
+        MeshFormat::Off => read_off(bytes, name, limits),
     }
 }
 
@@ -137,11 +162,15 @@ pub fn read_mesh_with_limits(path: impl AsRef<Path>, limits: &ReadLimits) -> Res
     read_mesh_bytes(&bytes, format, path, limits)
 }
 
-/// Writes a mesh in the given format to any writer.
+/// Writes a mesh in the given format to any writer; `Unsupported` for a read-only format.
 pub fn write_mesh_to(mut out: impl Write, mesh: &Mesh, format: MeshFormat) -> std::io::Result<()> {
     match format {
         MeshFormat::Obj => write_obj(&mut out, mesh),
         MeshFormat::Ply => write_ply(&mut out, mesh),
+        MeshFormat::Stl | MeshFormat::Off => Err(std::io::Error::new(
+            std::io::ErrorKind::Unsupported,
+            format!("{format:?} is read only: write .obj or .ply"),
+        )),
     }
 }
 
@@ -149,10 +178,11 @@ pub fn write_mesh_to(mut out: impl Write, mesh: &Mesh, format: MeshFormat) -> st
 /// known extension, and a folder that exists.
 pub fn output_format(path: impl AsRef<Path>) -> Result<MeshFormat, MeshError> {
     let path = path.as_ref();
-    let format = MeshFormat::from_extension(path).ok_or_else(|| MeshError::UnsupportedFormat {
-        path: PathBuf::from(path),
-        reason: "output extension must be .obj or .ply".into(),
-    })?;
+    let format =
+        MeshFormat::from_extension(path).filter(|f| f.writable()).ok_or_else(|| MeshError::UnsupportedFormat {
+            path: PathBuf::from(path),
+            reason: "output extension must be .obj or .ply (STL and OFF are read only)".into(),
+        })?;
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty())
         && !parent.is_dir()
     {
