@@ -330,7 +330,65 @@ fn stl_and_off_inputs_are_read_and_outputs_are_refused() {
         let report = ok_json(&["simplify", s(input), "-o", s(&out), "--ratio", "0.5", "--json"]);
         assert!(report["faces_out"].as_u64().unwrap() <= mesh.face_count() as u64 / 2 + 1, "{report}");
     }
-    fails_with(&["convert", s(&obj), s(&dir.join("out.stl"))], "STL and OFF are read only");
+    fails_with(&["convert", s(&obj), s(&dir.join("out.stl"))], "read only");
     std::fs::write(dir.join("lying.stl"), &stl[..stl.len() - 7]).unwrap();
     fails_with(&["info", s(&dir.join("lying.stl"))], "header counts");
+}
+
+#[test]
+fn attributes_are_listed_converted_and_their_loss_is_said() {
+    let dir = tempdir("attributes");
+    let cube = dir.join("cube.obj");
+    // A cube whose six faces each have their own texture square and flat normal.
+    std::fs::write(
+        &cube,
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\
+         vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+         vn 0 0 -1\nvn 0 0 1\nvn 0 -1 0\nvn 0 1 0\nvn 1 0 0\nvn -1 0 0\n\
+         f 1/1/1 4/4/1 3/3/1 2/2/1\nf 5/1/2 6/2/2 7/3/2 8/4/2\nf 1/1/3 2/2/3 6/3/3 5/4/3\n\
+         f 3/1/4 4/2/4 8/3/4 7/4/4\nf 2/1/5 3/2/5 7/3/5 6/4/5\nf 1/1/6 5/2/6 8/3/6 4/4/6\n",
+    )
+    .unwrap();
+    let info = ok_json(&["info", s(&cube), "--json"]);
+    assert_eq!(info["attributes"], serde_json::json!(["normal", "uv"]));
+    assert_eq!(info["seam_edges"], 12);
+    for out in ["copy.obj", "copy.ply"] {
+        let out = dir.join(out);
+        assert!(meshlod(&["convert", s(&cube), s(&out)]).status.success());
+        let copy = ok_json(&["info", s(&out), "--json"]);
+        // PLY writes a seam vertex once per side (one value per vertex) and joins them back by
+        // position when it reads: the same vertices and seams either way.
+        for key in ["attributes", "faces", "vertices", "seam_edges", "boundary_edges"] {
+            assert_eq!(copy[key], info[key], "{out:?}: {key}");
+        }
+    }
+    let out = meshlod(&["simplify", s(&cube), "-o", s(&dir.join("lod.obj")), "--ratio", "0.5", "--json"]);
+    assert!(out.status.success());
+    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let said = "attributes (normal, uv) are not kept";
+    assert!(report["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains(said)), "{report}");
+    assert!(String::from_utf8_lossy(&out.stderr).contains(said));
+}
+
+#[test]
+fn textured_gltf_assets_convert_to_obj_with_their_attributes() {
+    let Some(textured) = meshlod_engine::datasets::require_shared_textured("textured_gltf_convert") else { return };
+    let dir = tempdir("gltf");
+    for asset in ["draco__Duck/Duck.gltf", "draco__CesiumMan/CesiumMan.gltf"] {
+        let input = textured.join(asset);
+        let info = ok_json(&["info", s(&input), "--json"]);
+        assert_eq!(info["attributes"], serde_json::json!(["normal", "uv"]), "{asset}");
+        assert_eq!(
+            (info["boundary_edges"].as_u64(), info["components"].as_u64()),
+            (Some(0), Some(1)),
+            "{asset}: one closed surface"
+        );
+        let out = dir.join("asset.obj");
+        assert!(meshlod(&["convert", s(&input), s(&out)]).status.success(), "{asset}");
+        let copy = ok_json(&["info", s(&out), "--json"]);
+        for key in ["vertices", "faces", "attributes", "seam_edges"] {
+            assert_eq!(copy[key], info[key], "{asset}: {key}");
+        }
+    }
+    fails_with(&["convert", s(&textured.join("draco__Duck/Duck.gltf")), s(&dir.join("duck.glb"))], "read only");
 }

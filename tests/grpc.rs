@@ -318,6 +318,48 @@ async fn streamed_progressive_mesh_reassembles_exactly() {
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn encoded_glb_and_mesh_attributes_are_read_and_their_loss_is_said() {
+    let server = TestServer::start(ServerConfig::default()).await;
+    let mut client = server.client().await;
+    // Two quads under a mirrored node hierarchy, with texture coordinates (engine/tests/fuzz-corpus).
+    let glb = include_bytes!("../engine/tests/fuzz-corpus/quad-nodes.glb").to_vec();
+    let request = proto::SimplifyRequest {
+        input: Some(proto::MeshInput {
+            source: Some(proto::mesh_input::Source::File(proto::EncodedMesh {
+                data: glb,
+                format: proto::MeshFormat::Gltf as i32,
+            })),
+        }),
+        options: Some(proto::SimplifyOptions { target_ratio: Some(0.5), ..Default::default() }),
+    };
+    let response = client.simplify(request).await.expect("a GLB is read").into_inner();
+    let stats = response.stats.unwrap();
+    assert_eq!(stats.faces_in, 4);
+    assert!(stats.warnings.iter().any(|w| w.contains("attributes (uv) are not kept")), "{:?}", stats.warnings);
+    // A GLB whose buffer lives in another file cannot be read from a request.
+    let gltf =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../engine/tests/fuzz-corpus/quad-nodes.gltf"))
+            .unwrap();
+    let start = gltf.find("data:").unwrap();
+    let end = start + gltf[start..].find('"').unwrap();
+    let outside = format!("{}outside.bin{}", &gltf[..start], &gltf[end..]);
+    let status = client
+        .simplify(proto::SimplifyRequest {
+            input: Some(proto::MeshInput {
+                source: Some(proto::mesh_input::Source::File(proto::EncodedMesh {
+                    data: outside.into_bytes(),
+                    format: proto::MeshFormat::Gltf as i32,
+                })),
+            }),
+            options: None,
+        })
+        .await
+        .unwrap_err();
+    assert_eq!(status.code(), tonic::Code::InvalidArgument);
+    assert!(status.message().contains("cannot be read here"), "{}", status.message());
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn invalid_requests_name_the_field() {
     let server = TestServer::start(ServerConfig {
         limits: MeshLimits { max_faces: 5000, max_vertices: 5000 },
@@ -331,11 +373,26 @@ async fn invalid_requests_name_the_field() {
         }),
         options: None,
     };
+    let attributed = |uvs: Vec<f32>, normals: Vec<f32>, colors: Vec<f32>| proto::SimplifyRequest {
+        input: Some(proto::MeshInput {
+            source: Some(proto::mesh_input::Source::Mesh(proto::Mesh {
+                positions: vec![0., 0., 0., 1., 0., 0., 0., 1., 0.],
+                indices: vec![0, 1, 2],
+                uvs,
+                normals,
+                colors,
+            })),
+        }),
+        options: None,
+    };
     let cases: Vec<(proto::SimplifyRequest, &str)> = vec![
         (tri(vec![0., 0., 0., 1., 0., 0., 0., f32::NAN, 0.], vec![0, 1, 2]), "input.mesh.positions[7]"),
         (tri(vec![0., 0., 0., 1., 0., 0., 0., 1., 0.], vec![0, 1, 3]), "input.mesh.indices[2]"),
         (tri(vec![0., 0., 0., 1., 0., 0., 0., 1.], vec![0, 1, 2]), "input.mesh.positions"),
         (tri(vec![], vec![]), "input.mesh.indices"),
+        (attributed(vec![0.5; 5], vec![], vec![]), "input.mesh.uvs"),
+        (attributed(vec![], vec![0.0, 0.0, 1.0, f32::NAN, 0.0, 1.0, 0.0, 0.0, 1.0], vec![]), "input.mesh.normals[3]"),
+        (attributed(vec![], vec![], vec![1.0; 8]), "input.mesh.colors"),
         (proto::SimplifyRequest { input: None, options: None }, "input"),
         (
             proto::SimplifyRequest {

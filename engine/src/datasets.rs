@@ -37,6 +37,39 @@ pub fn require_shared_meshes(test: &str) -> Option<PathBuf> {
     }
 }
 
+/// Environment variable naming the shared textured assets directory.
+pub const TEXTURED_ENV: &str = "MESHLOD_TEXTURED";
+
+/// The shared textured assets (glTF, OBJ + MTL with images; `MANIFEST.tsv` inside), if present:
+/// `$MESHLOD_TEXTURED`, else `textured/` beside the shared meshes, else `../shared/textured`.
+pub fn shared_textured_dir() -> Option<PathBuf> {
+    if let Some(dir) = std::env::var_os(TEXTURED_ENV) {
+        let dir = PathBuf::from(dir);
+        return dir.is_dir().then_some(dir);
+    }
+    let beside = shared_meshes_dir().and_then(|m| m.parent().map(|p| p.join("textured")));
+    let workspace = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    beside
+        .into_iter()
+        .chain([PathBuf::from("../shared/textured"), workspace.join("../shared/textured")])
+        .find(|d| d.join("MANIFEST.tsv").is_file())
+}
+
+/// [`require_shared_meshes`] for the textured assets: the directory, or a loud message (a panic
+/// under CI) when they are missing.
+pub fn require_shared_textured(test: &str) -> Option<PathBuf> {
+    match shared_textured_dir() {
+        Some(dir) => Some(dir),
+        None if std::env::var_os("CI").is_some() => {
+            panic!("{test}: shared textured assets not found (set {TEXTURED_ENV}); CI must run with them")
+        }
+        None => {
+            eprintln!("\n!!! {test}: SKIPPED — shared textured assets not found (set {TEXTURED_ENV}) !!!\n");
+            None
+        }
+    }
+}
+
 /// Path of one shared mesh file (`name` without extension), if the directory and the file exist.
 pub fn shared_mesh(name: &str) -> Option<PathBuf> {
     shared_meshes_dir().map(|d| d.join(format!("{name}.obj"))).filter(|p| p.is_file())

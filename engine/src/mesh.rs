@@ -32,16 +32,142 @@ impl FaceId {
     }
 }
 
-/// Per-corner attributes kept from a file for later use (texture seams, split normals).
+/// Per-corner attributes read from a file (texture coordinates with their seams, split normals,
+/// colours).
 ///
-/// Both arrays, when present, hold one entry per triangle corner: `3 * triangles.len()` entries, in
-/// triangle order. Geometry algorithms that change connectivity drop them.
+/// Each array, when present, holds one entry per triangle corner: `3 * triangles.len()` entries,
+/// in triangle order, so a vertex on a seam has different values in the faces on either side.
+/// Reading, writing, cleaning and converting keep them; the simplifier and the refiner do not yet
+/// (they say so in their reports' warnings).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct CornerAttributes {
     /// Texture coordinates per corner.
     pub uvs: Option<Vec<[f32; 2]>>,
     /// Normals per corner.
     pub normals: Option<Vec<[f32; 3]>>,
+    /// Colours per corner, RGBA in [0, 1].
+    pub colors: Option<Vec<[f32; 4]>>,
+}
+
+/// Vertices split by attributes: see [`CornerAttributes::wedges`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Wedges {
+    /// Per output vertex: a corner that has it, or (when `identity`) the vertex itself.
+    pub source: Vec<usize>,
+    /// Per corner (3 per triangle): its output vertex.
+    pub corner_vertex: Vec<u32>,
+    /// True when there are no attributes and the output vertices are the mesh's own.
+    pub identity: bool,
+}
+
+impl Wedges {
+    /// The mesh vertex of output vertex `i`.
+    pub fn vertex(&self, triangles: &[[u32; 3]], i: usize) -> usize {
+        let k = self.source[i];
+        if self.identity { k } else { triangles[k / 3][k % 3] as usize }
+    }
+}
+
+impl CornerAttributes {
+    /// Names of the attributes present, as `info` lists them: "normal", "uv", "color".
+    pub fn names(&self) -> Vec<&'static str> {
+        let mut names = Vec::new();
+        if self.normals.is_some() {
+            names.push("normal");
+        }
+        if self.uvs.is_some() {
+            names.push("uv");
+        }
+        if self.colors.is_some() {
+            names.push("color");
+        }
+        names
+    }
+
+    /// Whether there is no attribute.
+    pub fn is_empty(&self) -> bool {
+        self.uvs.is_none() && self.normals.is_none() && self.colors.is_none()
+    }
+
+    /// The attributes of the corners `kept` (corner indices), in that order.
+    pub fn pick(&self, kept: impl Iterator<Item = usize> + Clone) -> CornerAttributes {
+        fn pick<T: Copy>(values: &Option<Vec<T>>, kept: impl Iterator<Item = usize>) -> Option<Vec<T>> {
+            values.as_ref().map(|v| kept.map(|c| v[c]).collect())
+        }
+        CornerAttributes {
+            uvs: pick(&self.uvs, kept.clone()),
+            normals: pick(&self.normals, kept.clone()),
+            colors: pick(&self.colors, kept),
+        }
+    }
+
+    /// Whether corners `a` and `b` carry the same attributes, bit for bit.
+    pub fn same(&self, a: usize, b: usize) -> bool {
+        fn same<const N: usize>(values: &Option<Vec<[f32; N]>>, a: usize, b: usize) -> bool {
+            values.as_ref().is_none_or(|v| v[a].map(f32::to_bits) == v[b].map(f32::to_bits))
+        }
+        same(&self.uvs, a, b) && same(&self.normals, a, b) && same(&self.colors, a, b)
+    }
+
+    /// Splits the mesh's vertices where their corners differ, for formats with one value per
+    /// vertex (PLY, glTF, GPU buffers): one output vertex per distinct (vertex, attributes) pair.
+    /// Returns, per output vertex, a corner that has it (so its vertex and values), and per corner
+    /// its output vertex. Without attributes the vertices stay as they are (every vertex, used or
+    /// not; `source` then holds vertex indices, marked by [`Wedges::identity`]).
+    pub fn wedges(&self, triangles: &[[u32; 3]], vertex_count: usize) -> Wedges {
+        if self.is_empty() {
+            return Wedges {
+                source: (0..vertex_count).collect(),
+                corner_vertex: triangles.iter().flatten().copied().collect(),
+                identity: true,
+            };
+        }
+        let key = |k: usize| {
+            let mut bits = Vec::with_capacity(9);
+            bits.extend(self.normals.iter().flat_map(|n| n[k].map(f32::to_bits)));
+            bits.extend(self.uvs.iter().flat_map(|u| u[k].map(f32::to_bits)));
+            bits.extend(self.colors.iter().flat_map(|c| c[k].map(f32::to_bits)));
+            bits
+        };
+        let mut seen: std::collections::HashMap<(u32, Vec<u32>), u32> = std::collections::HashMap::new();
+        let mut source = Vec::new();
+        let corner_vertex = (0..3 * triangles.len())
+            .map(|k| {
+                *seen.entry((triangles[k / 3][k % 3], key(k))).or_insert_with(|| {
+                    source.push(k);
+                    source.len() as u32 - 1
+                })
+            })
+            .collect();
+        Wedges { source, corner_vertex, identity: false }
+    }
+
+    /// Checks one entry per corner and finite values; errors name the attribute and the corner.
+    fn check(&self, corner_count: usize) -> Result<(), MeshError> {
+        fn check<const N: usize>(
+            values: &Option<Vec<[f32; N]>>,
+            name: &'static str,
+            corner_count: usize,
+        ) -> Result<(), MeshError> {
+            let Some(values) = values else { return Ok(()) };
+            if values.len() != corner_count {
+                return Err(MeshError::InvalidParameter {
+                    name,
+                    reason: format!("{} per-corner values for {corner_count} corners", values.len()),
+                });
+            }
+            if let Some(corner) = values.iter().position(|v| v.iter().any(|c| !c.is_finite())) {
+                return Err(MeshError::InvalidParameter {
+                    name,
+                    reason: format!("corner {corner} (face {}) has a non-finite value", corner / 3),
+                });
+            }
+            Ok(())
+        }
+        check(&self.uvs, "uv", corner_count)?;
+        check(&self.normals, "normal", corner_count)?;
+        check(&self.colors, "color", corner_count)
+    }
 }
 
 /// An indexed triangle mesh.
@@ -106,16 +232,32 @@ impl Mesh {
                 return Err(MeshError::IndexOutOfRange { face, index: index as i64, vertex_count });
             }
         }
-        let corner_count = 3 * self.triangles.len();
-        let uv_ok = self.corners.uvs.as_ref().is_none_or(|u| u.len() == corner_count);
-        let normal_ok = self.corners.normals.as_ref().is_none_or(|n| n.len() == corner_count);
-        if !uv_ok || !normal_ok {
-            return Err(MeshError::InvalidParameter {
-                name: "corners",
-                reason: format!("per-corner attributes must have {corner_count} entries"),
-            });
-        }
-        Ok(())
+        self.corners.check(3 * self.triangles.len())
+    }
+
+    /// Joins vertices at bit-identical positions (−0 and +0 alike) into one, keeping the first
+    /// one's place: formats with one attribute value per vertex (glTF, PLY) split a vertex along
+    /// every texture seam and hard edge, which would leave the surface cut open there. The
+    /// per-corner attributes are untouched, so a seam stays a seam (an edge whose faces differ in
+    /// their corners) rather than a border. Returns the number of vertices joined away.
+    pub fn weld_positions(&mut self) -> usize {
+        let mut first: std::collections::HashMap<[u32; 3], u32> = std::collections::HashMap::new();
+        let mut positions = Vec::with_capacity(self.positions.len());
+        let remap: Vec<u32> = self
+            .positions
+            .iter()
+            .map(|p| {
+                let key = p.map(|c| (c + 0.0).to_bits());
+                *first.entry(key).or_insert_with(|| {
+                    positions.push(*p);
+                    positions.len() as u32 - 1
+                })
+            })
+            .collect();
+        let joined = self.positions.len() - positions.len();
+        self.positions = positions;
+        self.triangles.iter_mut().for_each(|t| *t = t.map(|v| remap[v as usize]));
+        joined
     }
 
     /// Number of vertices (including unreferenced ones).

@@ -48,6 +48,11 @@ pub struct MeshReport {
     pub is_manifold_oriented: bool,
     /// Euler characteristic V − E + F over referenced vertices.
     pub euler_characteristic: i64,
+    /// Per-corner attributes the mesh carries ("normal", "uv", "color"), besides positions.
+    pub attributes: Vec<&'static str>,
+    /// Two-face edges whose faces carry different attributes at one of its ends (texture seams,
+    /// hard normals, colour borders).
+    pub seam_edges: usize,
 }
 
 /// Counts what a mesh has.
@@ -81,11 +86,21 @@ pub fn validate(mesh: &Mesh) -> MeshReport {
     let mut non_manifold_edges = 0;
     let mut on_non_manifold_edge = vec![false; mesh.vertex_count()];
     let mut inconsistently_oriented_edges = 0;
+    let mut seam_edges = 0;
+    // The corner of face f at vertex v.
+    let corner = |f: usize, v: u32| 3 * f + tris[f].iter().position(|&x| x == v).expect("v is a corner of f");
     for (e, &[a, b]) in topology.edges.iter().enumerate() {
         let faces = topology.edge_faces.get(e);
         match faces.len() {
             1 => boundary_edges += 1,
             2 => {
+                let (f, g) = (faces[0].index(), faces[1].index());
+                if !mesh.corners.is_empty()
+                    && (!mesh.corners.same(corner(f, a), corner(g, a))
+                        || !mesh.corners.same(corner(f, b), corner(g, b)))
+                {
+                    seam_edges += 1;
+                }
                 let forward = |f: usize| {
                     let t = tris[f];
                     (0..3).any(|i| t[i] == a && t[(i + 1) % 3] == b)
@@ -141,6 +156,8 @@ pub fn validate(mesh: &Mesh) -> MeshReport {
             && non_manifold_vertices == 0
             && inconsistently_oriented_edges == 0,
         euler_characteristic: referenced_count - topology.edges.len() as i64 + tris.len() as i64,
+        attributes: mesh.corners.names(),
+        seam_edges,
     }
 }
 
@@ -334,15 +351,8 @@ pub fn clean(mesh: &Mesh) -> (Mesh, CleanReport) {
     report.removed_unreferenced_vertices = mesh.vertex_count() - report.welded_vertices - positions.len();
     let triangles = kept_faces.iter().map(|&(_, w)| w.map(|v| new_index[v as usize])).collect();
     let kept: Vec<usize> = kept_faces.iter().map(|&(f, _)| f).collect();
-    let corners = crate::mesh::CornerAttributes {
-        uvs: mesh.corners.uvs.as_ref().map(|a| pick_corners(a, &kept)),
-        normals: mesh.corners.normals.as_ref().map(|a| pick_corners(a, &kept)),
-    };
+    let corners = mesh.corners.pick(kept.iter().flat_map(|&f| [3 * f, 3 * f + 1, 3 * f + 2]));
     let cleaned = Mesh { positions, triangles, corners };
     debug_assert!(cleaned.check().is_ok());
     (cleaned, report)
-}
-
-fn pick_corners<T: Copy>(attribute: &[T], faces: &[usize]) -> Vec<T> {
-    faces.iter().flat_map(|&f| (0..3).map(move |c| attribute[3 * f + c])).collect()
 }

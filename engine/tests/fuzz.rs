@@ -1,4 +1,4 @@
-//! Mutation fuzzing on stable Rust, deterministic and bounded: the OBJ, PLY, STL, OFF and `.pm` readers on
+//! Mutation fuzzing on stable Rust, deterministic and bounded: the OBJ, PLY, STL, OFF, glTF and `.pm` readers on
 //! mutations of the committed seed corpus (`tests/fuzz-corpus/`), and the simplify → progressive
 //! mesh → level pipeline on arbitrary small meshes. Every input must end in a value or a clear
 //! error: no panic, and every mesh that comes back passes its own check.

@@ -317,3 +317,188 @@ fn a_read_stops_when_cancelled() {
         assert!(matches!(r, Err(MeshError::Cancelled)), "{format:?}: {r:?}");
     }
 }
+
+/// A cube of 8 positions whose faces each have their own texture square and flat normal: every
+/// edge is a seam, as in a textured box exported from any tool.
+fn textured_cube() -> Mesh {
+    let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n\
+        vt 0 0\nvt 0.5 0\nvt 0.5 0.5\nvt 0 0.5\nvt 0.25 0.75\n\
+        vn 0 0 -1\nvn 0 0 1\nvn 0 -1 0\nvn 0 1 0\nvn 1 0 0\nvn -1 0 0\n\
+        f 1/1/1 4/4/1 3/3/1 2/2/1\nf 5/1/2 6/2/2 7/3/2 8/5/2\nf 1/1/3 2/2/3 6/3/3 5/4/3\n\
+        f 3/1/4 4/2/4 8/3/4 7/4/4\nf 2/1/5 3/2/5 7/3/5 6/4/5\nf 1/1/6 5/2/6 8/3/6 4/4/6\n";
+    obj(text).unwrap()
+}
+
+#[test]
+fn attributes_survive_every_writer_and_are_counted() {
+    let dir = tempdir("attributes");
+    let cube = textured_cube();
+    assert_eq!((cube.vertex_count(), cube.face_count()), (8, 12));
+    let report = meshlod_engine::validate::validate(&cube);
+    assert_eq!(report.attributes, ["normal", "uv"]);
+    // Every cube edge joins two faces of different normals; the 6 diagonals join faces that
+    // share their texture square.
+    assert_eq!(report.seam_edges, 12);
+
+    // OBJ: positions, triangles and every corner's attributes, bit for bit.
+    let path = dir.join("cube.obj");
+    write_mesh(&path, &cube).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert_eq!((text.matches("\nvt ").count(), text.matches("\nvn ").count()), (5, 6), "each value once");
+    assert_eq!(read_mesh(&path).unwrap(), cube);
+
+    // PLY: one value per vertex, so each seam vertex is written once per distinct corner value
+    // (4 per cube face), and joined back by position when read: the same 8 vertices, the same
+    // seams, the corners at the same positions with the same values.
+    let path = dir.join("cube.ply");
+    write_mesh(&path, &cube).unwrap();
+    let text = String::from_utf8_lossy(&std::fs::read(&path).unwrap()[..200]).into_owned();
+    assert!(text.contains("element vertex 24"), "{text}");
+    let back = read_mesh(&path).unwrap();
+    assert_eq!(back.face_count(), 12);
+    assert_eq!(back.vertex_count(), 8);
+    assert_eq!(meshlod_engine::validate::validate(&back).seam_edges, 12);
+    assert_eq!(back.corners, cube.corners);
+    let corner_positions =
+        |m: &Mesh| m.triangles.iter().flatten().map(|&v| m.positions[v as usize]).collect::<Vec<_>>();
+    assert_eq!(corner_positions(&back), corner_positions(&cube));
+
+    // Colours: PLY bytes in, the same bytes out.
+    let mut coloured = cube.clone();
+    coloured.corners.normals = None;
+    coloured.corners.colors =
+        Some((0..36).map(|k| [(k % 7) as f32 / 255.0, 1.0, (3 * k % 256) as f32 / 255.0, 1.0]).collect());
+    let mut bytes = Vec::new();
+    write_mesh_to(&mut bytes, &coloured, MeshFormat::Ply).unwrap();
+    let back = ply(&bytes).unwrap();
+    assert_eq!(back.corners.names(), ["uv", "color"]);
+    let channels = |m: &Mesh| {
+        m.corners.colors.as_ref().unwrap().iter().map(|c| c.map(|x| (x * 255.0).round() as u8)).collect::<Vec<_>>()
+    };
+    assert_eq!(channels(&back), channels(&coloured));
+
+    // Without attributes nothing changes: the same vertices, no attribute properties.
+    let plain = procedural::icosphere(1);
+    let mut bytes = Vec::new();
+    write_mesh_to(&mut bytes, &plain, MeshFormat::Ply).unwrap();
+    assert!(!String::from_utf8_lossy(&bytes[..300]).contains("property float u"));
+    assert_eq!(ply(&bytes).unwrap(), plain);
+}
+
+#[test]
+fn bad_attributes_are_refused_by_name() {
+    let mut cube = textured_cube();
+    cube.corners.uvs.as_mut().unwrap()[7][1] = f32::NAN;
+    let err = cube.check().unwrap_err();
+    assert!(
+        matches!(&err, MeshError::InvalidParameter { name: "uv", reason } if reason.contains("corner 7 (face 2)")),
+        "{err}"
+    );
+    let mut cube = textured_cube();
+    cube.corners.normals.as_mut().unwrap().pop();
+    let err = cube.check().unwrap_err();
+    assert!(
+        matches!(&err, MeshError::InvalidParameter { name: "normal", reason } if reason.contains("35 per-corner values for 36")),
+        "{err}"
+    );
+    assert_parse_error(obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 nan\nf 1/1 2/1 3/1\n"), "line 4", "non-finite");
+    assert_parse_error(
+        obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n"),
+        "line 5",
+        "texture coordinate 2 but the file has 1",
+    );
+    let header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty float u\nproperty float v\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    assert_parse_error(
+        ply(format!("{header}0 0 0 0 0\n1 0 0 nan 0\n0 1 0 0 1\n3 0 1 2\n").as_bytes()),
+        "vertex 1",
+        "non-finite texture coordinate",
+    );
+}
+
+/// Rows of the textured assets' manifest: file, then its column values by name.
+fn textured_manifest(dir: &Path) -> Vec<std::collections::HashMap<String, String>> {
+    let text = std::fs::read_to_string(dir.join("MANIFEST.tsv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split('\t').collect();
+    lines
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| header.iter().zip(l.split('\t')).map(|(k, v)| (k.to_string(), v.to_string())).collect())
+        .collect()
+}
+
+#[test]
+fn textured_assets_read_with_their_attributes_as_one_surface() {
+    let Some(dir) = meshlod_engine::datasets::require_shared_textured("textured_assets_read") else { return };
+    let rows = textured_manifest(&dir);
+    assert!(rows.len() >= 5, "the manifest lists {} assets", rows.len());
+    for row in rows {
+        let path = dir.join(&row["file"]);
+        let mesh = read_mesh(&path).unwrap_or_else(|e| panic!("{}: {e}", row["file"]));
+        assert_eq!(mesh.face_count().to_string(), row["triangles"], "{}", row["file"]);
+        let names = mesh.corners.names();
+        assert_eq!(names.contains(&"uv"), row["has_uv"] == "true", "{}: {names:?}", row["file"]);
+        assert_eq!(names.contains(&"normal"), row["has_normals"] == "true", "{}: {names:?}", row["file"]);
+        assert_eq!(names.contains(&"color"), row["has_colors"] == "true", "{}: {names:?}", row["file"]);
+        let report = meshlod_engine::validate::validate(&mesh);
+        // glTF splits seam vertices; the reader joins them back, so seams are seams there. OBJ keeps
+        // the file's vertices: an exporter that duplicated them leaves borders (`clean` joins them).
+        if row["format"] == "gltf" {
+            assert!(report.seam_edges > 0, "{}: a textured asset without a seam", row["file"]);
+        }
+        // Written as OBJ and read back: every attribute OBJ has, bit for bit.
+        let mut obj_bytes = Vec::new();
+        write_mesh_to(&mut obj_bytes, &mesh, MeshFormat::Obj).unwrap();
+        let back =
+            read_mesh_bytes(&obj_bytes, Some(MeshFormat::Obj), Path::new("back.obj"), &ReadLimits::default()).unwrap();
+        assert_eq!((&back.positions, &back.triangles), (&mesh.positions, &mesh.triangles), "{}", row["file"]);
+        assert_eq!((&back.corners.uvs, &back.corners.normals), (&mesh.corners.uvs, &mesh.corners.normals));
+    }
+}
+
+#[test]
+fn hostile_gltf_is_refused_by_name() {
+    let gltf = |json: &str| {
+        read_mesh_bytes(json.as_bytes(), Some(MeshFormat::Gltf), Path::new("test.gltf"), &ReadLimits::default())
+    };
+    // One triangle: 3 positions (36 bytes) and 3 u16 indices (6 bytes), embedded as base64.
+    let mut bin = Vec::new();
+    for p in [[0f32, 0., 0.], [1., 0., 0.], [0., 1., 0.]] {
+        for c in p {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for i in [0u16, 1, 2] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    use base64::Engine as _;
+    let uri =
+        format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
+    let doc = |buffer_length: usize, count: usize, extra: &str| {
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},{extra}"buffers":[{{"byteLength":{buffer_length},"uri":"{uri}"}}],
+            "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":6}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":{count},"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                         {{"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}]}}"#
+        )
+    };
+    let ok = gltf(&doc(42, 3, "")).unwrap();
+    assert_eq!((ok.vertex_count(), ok.face_count()), (3, 1));
+    let err = |json: String| gltf(&json).unwrap_err().to_string();
+    let e = err(doc(42, 4, ""));
+    assert!(e.contains("accessor 0") && e.contains("overrun"), "{e}");
+    let e = err(doc(420, 3, ""));
+    assert!(e.contains("buffer 0") && e.contains("declares 420 bytes but holds 42"), "{e}");
+    let e = err(doc(
+        42,
+        3,
+        r#""extensionsRequired":["KHR_draco_mesh_compression"],"extensionsUsed":["KHR_draco_mesh_compression"],"#,
+    ));
+    assert!(e.contains("KHR_draco_mesh_compression"), "{e}");
+    let e = err(doc(42, 3, "").replace(&uri, "outside.bin"));
+    assert!(e.contains("cannot be read here"), "{e}");
+    let e = err(doc(42, 3, "").replace(r#""POSITION":0"#, r#""POSITION":7"#));
+    assert!(e.contains("document"), "{e}");
+    let e = err("{\"asset\": ".into());
+    assert!(e.contains("test.gltf"), "{e}");
+}

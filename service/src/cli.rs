@@ -31,13 +31,13 @@ pub struct Cli {
 pub enum Command {
     /// Print a validation report: counts, bounding box, degenerate/duplicate faces, manifoldness.
     Info {
-        /// Mesh file (.obj, .ply, .stl or .off).
+        /// Mesh file (.obj, .ply, .stl, .off, .gltf or .glb).
         file: PathBuf,
         /// Print one JSON object instead of text.
         #[arg(long)]
         json: bool,
     },
-    /// Convert a mesh to OBJ or PLY (input OBJ, PLY, STL or OFF; format from the extensions).
+    /// Convert a mesh to OBJ or PLY (input OBJ, PLY, STL, OFF or glTF; format from the extensions).
     Convert {
         /// Input mesh.
         input: PathBuf,
@@ -219,7 +219,7 @@ impl std::str::FromStr for Auto {
 /// `meshlod simplify` flags (also `client simplify` and batch `simplify` jobs).
 #[derive(Debug, Clone, Args)]
 pub struct SimplifyArgs {
-    /// Input mesh (.obj, .ply, .stl or .off).
+    /// Input mesh (.obj, .ply, .stl, .off, .gltf or .glb).
     pub input: PathBuf,
     /// Output mesh (.obj or .ply).
     #[arg(short, long)]
@@ -314,7 +314,7 @@ impl SimplifyArgs {
 /// `meshlod refine` flags (also `client refine` and batch `refine` jobs).
 #[derive(Debug, Clone, Args)]
 pub struct RefineArgs {
-    /// Input mesh (.obj, .ply, .stl or .off).
+    /// Input mesh (.obj, .ply, .stl, .off, .gltf or .glb).
     pub input: PathBuf,
     /// Output mesh (.obj or .ply).
     #[arg(short, long)]

@@ -180,6 +180,7 @@ fn run_simplify(executor: &dyn Executor, args: &SimplifyArgs) -> Result<()> {
 fn run_refine(executor: &dyn Executor, args: &RefineArgs) -> Result<()> {
     let job = args.job();
     let report = with_progress(format!("refining {}", args.input.display()), || executor.refine(&job))?;
+    warn_all(&report);
     if args.json {
         return print_json(&report);
     }
@@ -247,7 +248,8 @@ fn info(file: &Path, json: bool) -> Result<()> {
             Value::String(s) => s.clone(),
             Value::Number(n) if n.is_f64() => sig(n.as_f64().unwrap_or(f64::NAN)),
             Value::Array(items) => {
-                items.iter().map(|i| i.as_f64().map(sig).unwrap_or_else(|| i.to_string())).collect::<Vec<_>>().join(" ")
+                let item = |i: &Value| i.as_f64().map(sig).or_else(|| i.as_str().map(String::from));
+                items.iter().map(|i| item(i).unwrap_or_else(|| i.to_string())).collect::<Vec<_>>().join(" ")
             }
             other => other.to_string(),
         };

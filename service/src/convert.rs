@@ -79,6 +79,7 @@ pub fn mesh_from_input(
                 Ok(proto::MeshFormat::Ply) => Some(MeshFormat::Ply),
                 Ok(proto::MeshFormat::Stl) => Some(MeshFormat::Stl),
                 Ok(proto::MeshFormat::Off) => Some(MeshFormat::Off),
+                Ok(proto::MeshFormat::Gltf) => Some(MeshFormat::Gltf),
                 Ok(proto::MeshFormat::Unspecified) => None,
                 Err(_) => {
                     return Err(invalid(format!("{field}.file.format"), format!("unknown format {}", file.format)));
@@ -140,17 +141,64 @@ pub fn mesh_from_proto(m: &proto::Mesh, field: &str, limits: &MeshLimits) -> Res
         ));
     }
     let positions = m.positions.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-    let triangles = m.indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-    Mesh::new(positions, triangles).map_err(|e| invalid(field, e.to_string()))
+    let triangles: Vec<[u32; 3]> = m.indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    // Per-vertex attributes become per-corner ones.
+    fn per_corner<const N: usize>(
+        values: &[f32],
+        name: &str,
+        vertex_count: usize,
+        triangles: &[[u32; 3]],
+    ) -> Result<Option<Vec<[f32; N]>>, Status> {
+        if values.is_empty() {
+            return Ok(None);
+        }
+        if values.len() != N * vertex_count {
+            return Err(invalid(
+                name,
+                format!(
+                    "length {} is not {N} per vertex ({} for {vertex_count} vertices)",
+                    values.len(),
+                    N * vertex_count
+                ),
+            ));
+        }
+        if let Some(i) = values.iter().position(|c| !c.is_finite()) {
+            return Err(invalid(format!("{name}[{i}]"), format!("{} is not finite", values[i])));
+        }
+        let at = |v: u32| std::array::from_fn(|k| values[N * v as usize + k]);
+        Ok(Some(triangles.iter().flatten().map(|&v| at(v)).collect()))
+    }
+    let corners = meshlod_engine::mesh::CornerAttributes {
+        normals: per_corner(&m.normals, &format!("{field}.normals"), vertex_count, &triangles)?,
+        uvs: per_corner(&m.uvs, &format!("{field}.uvs"), vertex_count, &triangles)?,
+        colors: per_corner(&m.colors, &format!("{field}.colors"), vertex_count, &triangles)?,
+    };
+    let mut mesh = Mesh::new(positions, triangles).map_err(|e| invalid(field, e.to_string()))?;
+    mesh.corners = corners;
+    Ok(mesh)
 }
 
-/// Converts an engine mesh to the contract.
+/// Converts an engine mesh to the contract: attributes per vertex, a vertex whose corners differ
+/// (a seam) once per distinct value.
 pub fn mesh_to_proto(mesh: &Mesh) -> proto::Mesh {
+    let c = &mesh.corners;
+    if c.is_empty() {
+        return proto::Mesh {
+            positions: mesh.positions.iter().flatten().copied().collect(),
+            indices: mesh.triangles.iter().flatten().copied().collect(),
+            ..Default::default()
+        };
+    }
+    let wedges = c.wedges(&mesh.triangles, mesh.vertex_count());
+    fn flat<const N: usize>(values: &Option<Vec<[f32; N]>>, source: &[usize]) -> Vec<f32> {
+        values.as_ref().map_or_else(Vec::new, |v| source.iter().flat_map(|&k| v[k]).collect())
+    }
     proto::Mesh {
-        positions: mesh.positions.iter().flatten().copied().collect(),
-        indices: mesh.triangles.iter().flatten().copied().collect(),
-        normals: Vec::new(),
-        uvs: Vec::new(),
+        positions: (0..wedges.source.len()).flat_map(|i| mesh.positions[wedges.vertex(&mesh.triangles, i)]).collect(),
+        indices: wedges.corner_vertex.clone(),
+        normals: flat(&c.normals, &wedges.source),
+        uvs: flat(&c.uvs, &wedges.source),
+        colors: flat(&c.colors, &wedges.source),
     }
 }
 

@@ -51,6 +51,17 @@ pub fn simplify_warnings(o: &proto::SimplifyOptions) -> Vec<String> {
     out
 }
 
+/// The warning for an input whose attributes `operation` does not carry yet.
+pub fn dropped_attributes(mesh: &Mesh, operation: &str) -> Option<String> {
+    let names = mesh.corners.names();
+    (!names.is_empty()).then(|| {
+        format!(
+            "the input's attributes ({}) are not kept: {operation} does not carry attributes yet, the result has positions only",
+            names.join(", ")
+        )
+    })
+}
+
 /// Simplifies `mesh` with the contract's options; `w_auto` asks `predictor`.
 pub fn simplify(
     mesh: &Mesh,
@@ -117,7 +128,7 @@ pub fn simplify(
         seconds: s.seconds,
         w_candidates,
         guard: options.guard,
-        warnings: simplify_warnings(o),
+        warnings: simplify_warnings(o).into_iter().chain(dropped_attributes(mesh, "simplification")).collect(),
         frozen_vertices: s.frozen_vertices as u32,
         target_faces: s.target_faces as u32,
         rejected: s.rejected as u64,
@@ -214,6 +225,7 @@ pub fn refine(
         rounds: s.rounds,
         etc_source: etc_source.into(),
         model_version,
+        warnings: dropped_attributes(mesh, "refinement").into_iter().collect(),
     };
     Ok((result, stats))
 }

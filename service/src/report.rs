@@ -97,6 +97,7 @@ pub fn refine(s: &proto::RefineStats) -> Report {
         "split_edges": s.split_edges,
         "collapses": s.collapses,
         "seconds": s.seconds,
+        "warnings": s.warnings,
     }))
 }
 

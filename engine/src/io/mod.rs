@@ -1,10 +1,11 @@
 //! Reading and writing meshes: OBJ and PLY (ascii, binary little and big endian) in and out; STL
-//! (binary and ascii) and OFF (ascii) in.
+//! (binary and ascii), OFF (ascii) and glTF 2.0 (`.gltf`, `.glb`) in.
 //!
 //! Readers treat every file as untrusted: nothing is allocated from a header count before the data
 //! that backs it has been seen, every index is range-checked, every coordinate must be finite, and
 //! errors name the file and the line, byte or element at fault.
 
+mod gltf;
 mod obj;
 mod off;
 mod ply;
@@ -21,6 +22,7 @@ use std::path::{Path, PathBuf};
 use crate::error::MeshError;
 use crate::mesh::Mesh;
 
+pub use gltf::read_gltf;
 pub use obj::{read_obj, write_obj};
 pub use off::read_off;
 pub use ply::{read_ply, write_ply};
@@ -37,6 +39,8 @@ pub enum MeshFormat {
     Stl,
     /// Object File Format, ascii (read only).
     Off,
+    /// glTF 2.0, `.gltf` (JSON) or `.glb` (binary container) (read only for now).
+    Gltf,
 }
 
 impl MeshFormat {
@@ -48,6 +52,7 @@ impl MeshFormat {
             "ply" => Some(MeshFormat::Ply),
             "stl" => Some(MeshFormat::Stl),
             "off" => Some(MeshFormat::Off),
+            "gltf" | "glb" => Some(MeshFormat::Gltf),
             _ => None,
         }
     }
@@ -62,6 +67,9 @@ impl MeshFormat {
     pub fn sniff(bytes: &[u8]) -> Option<MeshFormat> {
         if bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n") {
             return Some(MeshFormat::Ply);
+        }
+        if gltf::is_gltf(bytes) {
+            return Some(MeshFormat::Gltf);
         }
         if off::is_off(bytes) {
             return Some(MeshFormat::Off);
@@ -139,13 +147,15 @@ pub fn read_mesh_bytes(
 ) -> Result<Mesh, MeshError> {
     let format = format.or_else(|| MeshFormat::sniff(bytes)).ok_or_else(|| MeshError::UnsupportedFormat {
         path: name.to_path_buf(),
-        reason: "neither the extension nor the content says OBJ, PLY, STL or OFF".into(),
+        reason: "neither the extension nor the content says OBJ, PLY, STL, OFF or glTF".into(),
     })?;
     match format {
         MeshFormat::Obj => read_obj(bytes, name, limits),
         MeshFormat::Ply => read_ply(bytes, name, limits),
         MeshFormat::Stl => read_stl(bytes, name, limits),
         MeshFormat::Off => read_off(bytes, name, limits),
+        // Bytes alone: buffers outside them are not read.
+        MeshFormat::Gltf => read_gltf(bytes, name, None, limits),
     }
 }
 
@@ -159,6 +169,10 @@ pub fn read_mesh_with_limits(path: impl AsRef<Path>, limits: &ReadLimits) -> Res
     let path = path.as_ref();
     let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
     let format = MeshFormat::from_extension(path).or_else(|| MeshFormat::sniff(&bytes));
+    if format == Some(MeshFormat::Gltf) {
+        // A file on disk: its external buffers are resolved next to it.
+        return read_gltf(&bytes, path, Some(path.parent().unwrap_or(Path::new("."))), limits);
+    }
     read_mesh_bytes(&bytes, format, path, limits)
 }
 
@@ -167,7 +181,7 @@ pub fn write_mesh_to(mut out: impl Write, mesh: &Mesh, format: MeshFormat) -> st
     match format {
         MeshFormat::Obj => write_obj(&mut out, mesh),
         MeshFormat::Ply => write_ply(&mut out, mesh),
-        MeshFormat::Stl | MeshFormat::Off => Err(std::io::Error::new(
+        MeshFormat::Stl | MeshFormat::Off | MeshFormat::Gltf => Err(std::io::Error::new(
             std::io::ErrorKind::Unsupported,
             format!("{format:?} is read only: write .obj or .ply"),
         )),
@@ -181,7 +195,7 @@ pub fn output_format(path: impl AsRef<Path>) -> Result<MeshFormat, MeshError> {
     let format =
         MeshFormat::from_extension(path).filter(|f| f.writable()).ok_or_else(|| MeshError::UnsupportedFormat {
             path: PathBuf::from(path),
-            reason: "output extension must be .obj or .ply (STL and OFF are read only)".into(),
+            reason: "output extension must be .obj or .ply (STL, OFF and glTF are read only)".into(),
         })?;
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty())
         && !parent.is_dir()

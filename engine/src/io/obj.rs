@@ -6,6 +6,7 @@
 //! supports `v/vt/vn` corners and negative (relative) indices, triangulates polygons, and keeps
 //! texture coordinates and normals per corner when every face has them.
 
+use std::collections::HashMap;
 use std::io::Write;
 use std::path::Path;
 
@@ -220,15 +221,51 @@ pub fn read_obj(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
     Ok(mesh)
 }
 
-/// Writes positions and triangles as OBJ (1-based indices). Floats use the shortest representation
-/// that reads back to the same `f32`, so a write/read round trip is exact.
+/// Writes positions and triangles as OBJ (1-based indices), with the texture coordinates (`vt`)
+/// and normals (`vn`) the mesh carries per corner, each distinct value written once and the faces
+/// as `v/vt/vn`. Floats use the shortest representation that reads back to the same `f32`, so a
+/// write/read round trip is exact. Colours have no OBJ form and are not written.
 pub fn write_obj(out: &mut impl Write, mesh: &Mesh) -> std::io::Result<()> {
     writeln!(out, "# meshlod: {} vertices, {} triangles", mesh.vertex_count(), mesh.face_count())?;
     for p in &mesh.positions {
         writeln!(out, "v {} {} {}", p[0], p[1], p[2])?;
     }
-    for t in &mesh.triangles {
-        writeln!(out, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1)?;
+    // Each distinct value once, numbered in order of first use.
+    fn table<const N: usize>(values: &Option<Vec<[f32; N]>>) -> Option<(Vec<[f32; N]>, Vec<u32>)> {
+        let values = values.as_ref()?;
+        let mut seen: HashMap<[u32; N], u32> = HashMap::new();
+        let mut distinct = Vec::new();
+        let index = values
+            .iter()
+            .map(|v| {
+                *seen.entry(v.map(f32::to_bits)).or_insert_with(|| {
+                    distinct.push(*v);
+                    distinct.len() as u32 - 1
+                })
+            })
+            .collect();
+        Some((distinct, index))
+    }
+    let uvs = table(&mesh.corners.uvs);
+    let normals = table(&mesh.corners.normals);
+    for uv in uvs.iter().flat_map(|(d, _)| d) {
+        writeln!(out, "vt {} {}", uv[0], uv[1])?;
+    }
+    for n in normals.iter().flat_map(|(d, _)| d) {
+        writeln!(out, "vn {} {} {}", n[0], n[1], n[2])?;
+    }
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        write!(out, "f")?;
+        for (k, &v) in t.iter().enumerate() {
+            let c = 3 * f + k;
+            match (&uvs, &normals) {
+                (None, None) => write!(out, " {}", v + 1)?,
+                (Some((_, u)), None) => write!(out, " {}/{}", v + 1, u[c] + 1)?,
+                (None, Some((_, n))) => write!(out, " {}//{}", v + 1, n[c] + 1)?,
+                (Some((_, u)), Some((_, n))) => write!(out, " {}/{}/{}", v + 1, u[c] + 1, n[c] + 1)?,
+            }
+        }
+        writeln!(out)?;
     }
     Ok(())
 }

@@ -12,7 +12,7 @@ use glam::DVec3;
 use super::ReadLimits;
 use super::triangulate::triangulate_polygon;
 use crate::error::MeshError;
-use crate::mesh::Mesh;
+use crate::mesh::{CornerAttributes, Mesh};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Encoding {
@@ -297,6 +297,10 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
     };
 
     let mut positions: Vec<[f32; 3]> = Vec::new();
+    // Per-vertex attributes: normal, texture coordinate, colour (each all or nothing).
+    let mut normals: Vec<[f32; 3]> = Vec::new();
+    let mut uvs: Vec<[f32; 2]> = Vec::new();
+    let mut colors: Vec<[f32; 4]> = Vec::new();
     let mut polygons: Vec<(usize, Vec<i64>)> = Vec::new();
     let mut saw_vertex = false;
     let mut face_list_seen = false;
@@ -304,6 +308,9 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
         let is_vertex = element.name == "vertex";
         let is_face = element.name == "face";
         let mut xyz_slots = [usize::MAX; 3];
+        let mut normal_slots = [usize::MAX; 3];
+        let mut uv_slots = [usize::MAX; 2];
+        let mut color_slots = [usize::MAX; 4];
         if is_vertex {
             saw_vertex = true;
             for (k, p) in element.properties.iter().enumerate() {
@@ -312,6 +319,15 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
                         "x" => xyz_slots[0] = k,
                         "y" => xyz_slots[1] = k,
                         "z" => xyz_slots[2] = k,
+                        "nx" => normal_slots[0] = k,
+                        "ny" => normal_slots[1] = k,
+                        "nz" => normal_slots[2] = k,
+                        "u" | "s" | "texture_u" | "texture_s" => uv_slots[0] = k,
+                        "v" | "t" | "texture_v" | "texture_t" => uv_slots[1] = k,
+                        "red" | "diffuse_red" => color_slots[0] = k,
+                        "green" | "diffuse_green" => color_slots[1] = k,
+                        "blue" | "diffuse_blue" => color_slots[2] = k,
+                        "alpha" | "diffuse_alpha" => color_slots[3] = k,
                         _ => {}
                     }
                 }
@@ -341,6 +357,7 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
             limits.check_cancel()?;
             let loc = |k: u64| format!("{} {k}", element.name);
             let mut xyz = [0f64; 3];
+            let (mut normal, mut uv, mut color) = ([0f32; 3], [0f32; 2], [0f32, 0.0, 0.0, 1.0]);
             let mut indices: Vec<i64> = Vec::new();
             for (k, property) in element.properties.iter().enumerate() {
                 match property {
@@ -348,6 +365,17 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
                         let v = source.next_value(*kind).map_err(|r| MeshError::parse(path, loc(i), r))?;
                         if let Some(axis) = xyz_slots.iter().position(|&s| s == k) {
                             xyz[axis] = v;
+                        } else if let Some(axis) = normal_slots.iter().position(|&s| s == k) {
+                            normal[axis] = v as f32;
+                        } else if let Some(axis) = uv_slots.iter().position(|&s| s == k) {
+                            uv[axis] = v as f32;
+                        } else if let Some(channel) = color_slots.iter().position(|&s| s == k) {
+                            // Integer channels span their type's range; float channels are [0, 1].
+                            color[channel] = match kind {
+                                Scalar::U8 => (v / 255.0) as f32,
+                                Scalar::U16 => (v / 65535.0) as f32,
+                                _ => v as f32,
+                            };
                         }
                     }
                     Property::List { count, item, .. } => {
@@ -371,7 +399,22 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
                 if p.iter().any(|c| !c.is_finite()) {
                     return Err(MeshError::parse(path, loc(i), format!("non-finite coordinate {xyz:?}")));
                 }
+                for (name, values) in [("normal", &normal[..]), ("texture coordinate", &uv[..]), ("colour", &color[..])]
+                {
+                    if values.iter().any(|c| !c.is_finite()) {
+                        return Err(MeshError::parse(path, loc(i), format!("non-finite {name} {values:?}")));
+                    }
+                }
                 positions.push(p);
+                if !normal_slots.contains(&usize::MAX) {
+                    normals.push(normal);
+                }
+                if !uv_slots.contains(&usize::MAX) {
+                    uvs.push(uv);
+                }
+                if !color_slots[..3].contains(&usize::MAX) {
+                    colors.push(color);
+                }
             } else if is_face {
                 if indices.len() < 3 {
                     return Err(MeshError::parse(
@@ -426,28 +469,76 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
         }
         triangles.extend(local.iter().map(|t| [indices[t[0]] as u32, indices[t[1]] as u32, indices[t[2]] as u32]));
     }
-    Mesh::new(positions, triangles)
+    // Per-vertex values become per-corner values: a PLY vertex has one of each.
+    fn per_corner<T: Copy>(per_vertex: Vec<T>, vertex_count: usize, triangles: &[[u32; 3]]) -> Option<Vec<T>> {
+        (per_vertex.len() == vertex_count && vertex_count > 0)
+            .then(|| triangles.iter().flatten().map(|&v| per_vertex[v as usize]).collect())
+    }
+    let corners = CornerAttributes {
+        uvs: per_corner(uvs, vertex_count, &triangles),
+        normals: per_corner(normals, vertex_count, &triangles),
+        colors: per_corner(colors, vertex_count, &triangles),
+    };
+    let mut mesh = Mesh { positions, triangles, corners };
+    if !mesh.corners.is_empty() {
+        // One value per vertex means a seam is two vertices at one position: joined back, so a
+        // seam is a seam (see `Mesh::weld_positions`), as the writer's split round-trips.
+        mesh.weld_positions();
+    }
+    mesh.check()?;
+    Ok(mesh)
 }
 
 /// Writes a binary little-endian PLY: float x, y, z per vertex; uchar count + int indices per face.
+/// A mesh with per-corner attributes is written with float nx, ny, nz / u, v and uchar red,
+/// green, blue, alpha per vertex: PLY has one value per vertex, so a vertex whose corners differ
+/// (a seam) is written once per distinct value, as glTF and every GPU buffer do.
 pub fn write_ply(out: &mut impl Write, mesh: &Mesh) -> std::io::Result<()> {
-    write!(
-        out,
-        "ply\nformat binary_little_endian 1.0\ncomment written by meshlod\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
-        mesh.vertex_count(),
-        mesh.face_count()
-    )?;
-    let mut buf = Vec::with_capacity(mesh.vertex_count() * 12 + mesh.face_count() * 13);
-    for p in &mesh.positions {
-        for c in p {
-            buf.extend_from_slice(&c.to_le_bytes());
-        }
+    let c = &mesh.corners;
+    // PLY colours are bytes: values that make the same bytes make one vertex.
+    let mut quantised = c.clone();
+    if let Some(colors) = &mut quantised.colors {
+        colors.iter_mut().for_each(|col| *col = col.map(|x| colour_byte(x) as f32));
     }
-    for t in &mesh.triangles {
+    let wedges = quantised.wedges(&mesh.triangles, mesh.vertex_count());
+    let (source, corner_vertex) = (&wedges.source, &wedges.corner_vertex);
+    let mut header = format!(
+        "ply\nformat binary_little_endian 1.0\ncomment written by meshlod\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\n",
+        source.len()
+    );
+    if c.normals.is_some() {
+        header += "property float nx\nproperty float ny\nproperty float nz\n";
+    }
+    if c.uvs.is_some() {
+        header += "property float u\nproperty float v\n";
+    }
+    if c.colors.is_some() {
+        header += "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n";
+    }
+    header += &format!("element face {}\nproperty list uchar int vertex_indices\nend_header\n", mesh.face_count());
+    out.write_all(header.as_bytes())?;
+    let mut buf = Vec::with_capacity(source.len() * 12 + mesh.face_count() * 13);
+    for (i, &k) in source.iter().enumerate() {
+        let v = wedges.vertex(&mesh.triangles, i);
+        let floats = mesh.positions[v]
+            .into_iter()
+            .chain(c.normals.iter().flat_map(|n| n[k]))
+            .chain(c.uvs.iter().flat_map(|u| u[k]));
+        for f in floats {
+            buf.extend_from_slice(&f.to_le_bytes());
+        }
+        buf.extend(c.colors.iter().flat_map(|col| col[k].map(colour_byte)));
+    }
+    for t in corner_vertex.chunks_exact(3) {
         buf.push(3);
         for &i in t {
             buf.extend_from_slice(&(i as i32).to_le_bytes());
         }
     }
     out.write_all(&buf)
+}
+
+/// A colour channel in [0, 1] as a byte.
+fn colour_byte(c: f32) -> u8 {
+    (c.clamp(0.0, 1.0) * 255.0).round() as u8
 }
