@@ -336,7 +336,7 @@ fn stl_and_off_inputs_are_read_and_outputs_are_refused() {
 }
 
 #[test]
-fn attributes_are_listed_converted_and_their_loss_is_said() {
+fn attributes_are_listed_converted_kept_by_simplify_and_their_loss_is_said() {
     let dir = tempdir("attributes");
     let cube = dir.join("cube.obj");
     // A cube whose six faces each have their own texture square and flat normal.
@@ -362,12 +362,32 @@ fn attributes_are_listed_converted_and_their_loss_is_said() {
             assert_eq!(copy[key], info[key], "{out:?}: {key}");
         }
     }
-    let out = meshlod(&["simplify", s(&cube), "-o", s(&dir.join("lod.obj")), "--ratio", "0.5", "--json"]);
+    let bare = dir.join("bare.obj");
+    assert!(meshlod(&["convert", s(&cube), s(&bare), "--drop-attributes"]).status.success());
+    assert_eq!(ok_json(&["info", s(&bare), "--json"])["attributes"], serde_json::json!([]));
+    // Every cube vertex is on a seam: simplification keeps them all (and so every face), with
+    // their values; the progressive mesh has no attributes yet, and says so.
+    let lod = dir.join("lod.obj");
+    let pm = dir.join("lod.pm");
+    let out = meshlod(&["simplify", s(&cube), "-o", s(&lod), "--ratio", "0.5", "--pm", s(&pm), "--json"]);
     assert!(out.status.success());
     let report: Value = serde_json::from_slice(&out.stdout).unwrap();
-    let said = "attributes (normal, uv) are not kept";
+    assert_eq!(report["frozen_vertices"], 8, "{report}");
+    let kept = ok_json(&["info", s(&lod), "--json"]);
+    for key in ["attributes", "faces", "seam_edges"] {
+        assert_eq!(kept[key], info[key], "{key}");
+    }
+    let said = "attributes (normal, uv) are not kept: the progressive mesh does not carry";
     assert!(report["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains(said)), "{report}");
     assert!(String::from_utf8_lossy(&out.stderr).contains(said));
+    let plain = ok_json(&["simplify", s(&cube), "-o", s(&lod), "--ratio", "0.5", "--json"]);
+    assert_eq!(plain["warnings"], serde_json::json!([]), "no progressive mesh asked, nothing lost");
+    // Refinement does not carry them yet either.
+    let refined = ok_json(&["refine", s(&cube), "-o", s(&dir.join("fine.obj")), "--etc", "1", "--json"]);
+    assert!(
+        refined["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains("refinement")),
+        "{refined}"
+    );
 }
 
 #[test]

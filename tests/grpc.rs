@@ -318,7 +318,7 @@ async fn streamed_progressive_mesh_reassembles_exactly() {
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn encoded_glb_and_mesh_attributes_are_read_and_their_loss_is_said() {
+async fn encoded_glb_is_read_and_its_attributes_kept() {
     let server = TestServer::start(ServerConfig::default()).await;
     let mut client = server.client().await;
     // Two quads under a mirrored node hierarchy, with texture coordinates (engine/tests/fuzz-corpus).
@@ -330,11 +330,18 @@ async fn encoded_glb_and_mesh_attributes_are_read_and_their_loss_is_said() {
                 format: proto::MeshFormat::Gltf as i32,
             })),
         }),
-        options: Some(proto::SimplifyOptions { target_ratio: Some(0.5), ..Default::default() }),
+        options: Some(proto::SimplifyOptions {
+            target_ratio: Some(0.5),
+            return_progressive: true,
+            ..Default::default()
+        }),
     };
     let response = client.simplify(request).await.expect("a GLB is read").into_inner();
     let stats = response.stats.unwrap();
     assert_eq!(stats.faces_in, 4);
+    // The result keeps its texture coordinates, one per vertex; the progressive mesh does not.
+    let mesh = response.mesh.unwrap();
+    assert_eq!(mesh.uvs.len(), 2 * mesh.positions.len() / 3);
     assert!(stats.warnings.iter().any(|w| w.contains("attributes (uv) are not kept")), "{:?}", stats.warnings);
     // A GLB whose buffer lives in another file cannot be read from a request.
     let gltf =

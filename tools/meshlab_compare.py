@@ -43,7 +43,9 @@ def main():
     total = 0
     for name in names:
         original = os.path.join(tmp, f"{name}.ply")
-        subprocess.run([args.meshlod, "convert", os.path.join(args.meshes, f"{name}.obj"), original, "--clean"],
+        # Geometry only: MeshLab's quadric runs without texture coordinates, so meshlod does too.
+        subprocess.run([args.meshlod, "convert", os.path.join(args.meshes, f"{name}.obj"), original, "--clean",
+                        "--drop-attributes"],
                        check=True, stderr=subprocess.DEVNULL)
         for keep in args.keep:
             ours, faces = [], None

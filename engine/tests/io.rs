@@ -502,3 +502,55 @@ fn hostile_gltf_is_refused_by_name() {
     let e = err("{\"asset\": ".into());
     assert!(e.contains("test.gltf"), "{e}");
 }
+
+#[test]
+fn simplification_keeps_the_textured_assets_attributes_and_seams() {
+    use meshlod_engine::simplify::{SimplifyOptions, simplify};
+    let Some(dir) = meshlod_engine::datasets::require_shared_textured("simplification_keeps_attributes") else {
+        return;
+    };
+    for row in textured_manifest(&dir) {
+        let mesh = read_mesh(dir.join(&row["file"])).unwrap();
+        let before = meshlod_engine::validate::validate(&mesh);
+        let options = SimplifyOptions { target_ratio: Some(0.5), ..Default::default() };
+        let out = simplify(&mesh, &options).unwrap_or_else(|e| panic!("{}: {e}", row["file"]));
+        let lod = &out.mesh;
+        lod.check().unwrap();
+        assert_eq!(lod.corners.names(), mesh.corners.names(), "{}", row["file"]);
+        assert!(out.stats.collapses > 0, "{}: nothing collapsed", row["file"]);
+        eprintln!(
+            "{}: {} → {} faces (target {}, {}), {} of {} vertices frozen, seams {} → {}",
+            row["file"],
+            mesh.face_count(),
+            lod.face_count(),
+            out.stats.target_faces,
+            out.stats.stop_reason.as_str(),
+            out.stats.frozen_vertices,
+            mesh.vertex_count(),
+            before.seam_edges,
+            meshlod_engine::validate::validate(lod).seam_edges
+        );
+        // Every corner's values are values the input had, at a vertex of the same position (seam
+        // vertices never move; others take their survivor's values).
+        let input: std::collections::HashSet<Vec<u32>> =
+            (0..3 * mesh.face_count()).map(|k| corner_key(&mesh, k)).collect();
+        for k in 0..3 * lod.face_count() {
+            assert!(input.contains(&corner_key(lod, k)), "{}: corner {k} has values the input never had", row["file"]);
+        }
+        // Seams stay seams: none opens into a border (borders may only get fewer, coarser edges).
+        let after = meshlod_engine::validate::validate(lod);
+        assert!(after.boundary_edges <= before.boundary_edges, "{}", row["file"]);
+        assert!(after.seam_edges > 0 || before.seam_edges == 0, "{}", row["file"]);
+        assert!(after.is_manifold_oriented || !before.is_manifold_oriented, "{}", row["file"]);
+    }
+}
+
+/// The attribute values of corner `k`, as bits.
+fn corner_key(mesh: &Mesh, k: usize) -> Vec<u32> {
+    let c = &mesh.corners;
+    let mut key = Vec::new();
+    key.extend(c.uvs.iter().flat_map(|u| u[k].map(f32::to_bits)));
+    key.extend(c.normals.iter().flat_map(|n| n[k].map(f32::to_bits)));
+    key.extend(c.colors.iter().flat_map(|x| x[k].map(f32::to_bits)));
+    key
+}

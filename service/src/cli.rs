@@ -46,6 +46,10 @@ pub enum Command {
         /// Weld coincident vertices, drop degenerate/duplicate faces and unreferenced vertices.
         #[arg(long)]
         clean: bool,
+        /// Write positions only: leave out normals, texture coordinates and colours (a geometry-only
+        /// copy; simplifying it then ignores the input's seams).
+        #[arg(long)]
+        drop_attributes: bool,
     },
     /// Symmetric Hausdorff distance between two meshes, with certified lower and upper bounds
     /// (units relative to A).

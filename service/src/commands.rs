@@ -29,7 +29,7 @@ use crate::cli::{
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Info { file, json } => info(&file, json),
-        Command::Convert { input, output, clean } => convert(&input, &output, clean),
+        Command::Convert { input, output, clean, drop_attributes } => convert(&input, &output, clean, drop_attributes),
         Command::Hausdorff { a, b, tolerance, samples, seed, directed, json } => {
             let options = HausdorffOptions { samples, seed, tolerance, cancel: None };
             measure(&a, &b, &options, directed, json)
@@ -258,9 +258,12 @@ fn info(file: &Path, json: bool) -> Result<()> {
     Ok(())
 }
 
-fn convert(input: &Path, output: &Path, do_clean: bool) -> Result<()> {
+fn convert(input: &Path, output: &Path, do_clean: bool, drop_attributes: bool) -> Result<()> {
     output_format(output)?;
     let mut mesh = load(input)?;
+    if drop_attributes {
+        mesh.corners = Default::default();
+    }
     if do_clean {
         let (cleaned, report) = clean(&mesh);
         eprintln!("clean: {}", serde_json::to_string(&report)?);

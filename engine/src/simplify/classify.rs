@@ -47,13 +47,14 @@ pub(super) fn prepare_in_place(mesh: &Mesh) -> (Cow<'_, Mesh>, Vec<u32>, usize) 
         return (Cow::Borrowed(mesh), input_vertex, 0);
     }
     let positions = input_vertex.iter().map(|&v| mesh.positions[v as usize]).collect();
-    let triangles =
-        mesh.triangles.iter().filter(|t| !repeats_a_vertex(t)).map(|t| t.map(|v| new_index[v as usize])).collect();
-    (Cow::Owned(Mesh { positions, triangles, corners: Default::default() }), input_vertex, dropped)
+    let kept = (0..mesh.face_count()).filter(|&f| !repeats_a_vertex(&mesh.triangles[f]));
+    let triangles = kept.clone().map(|f| mesh.triangles[f].map(|v| new_index[v as usize])).collect();
+    let corners = mesh.corners.pick(kept.flat_map(|f| [3 * f, 3 * f + 1, 3 * f + 2]));
+    (Cow::Owned(Mesh { positions, triangles, corners }), input_vertex, dropped)
 }
 
 /// Drops faces that repeat a vertex and vertices that no face uses. Returns the prepared mesh
-/// (without per-corner attributes), the input index of each kept vertex, and the number of
+/// (without per-corner attributes: the public form, for the progressive mesh), the input index of each kept vertex, and the number of
 /// dropped faces.
 pub fn prepare(mesh: &Mesh) -> (Mesh, Vec<u32>, usize) {
     let (prepared, input_vertex, dropped) = prepare_in_place(mesh);
@@ -61,7 +62,7 @@ pub fn prepare(mesh: &Mesh) -> (Mesh, Vec<u32>, usize) {
         Cow::Borrowed(m) => {
             Mesh { positions: m.positions.clone(), triangles: m.triangles.clone(), corners: Default::default() }
         }
-        Cow::Owned(m) => m,
+        Cow::Owned(m) => Mesh { corners: Default::default(), ..m },
     };
     (prepared, input_vertex, dropped)
 }

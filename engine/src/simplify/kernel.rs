@@ -6,7 +6,7 @@
 use glam::DVec3;
 
 use crate::fan::{Corner, FanSlot};
-use crate::mesh::Mesh;
+use crate::mesh::{CornerAttributes, Mesh};
 use crate::pm::CollapseRecord;
 use crate::prefetch::prefetch;
 use crate::quadric::Quadric;
@@ -51,6 +51,11 @@ pub(crate) struct State<'o> {
     pub(super) cos_max_normal_change: f64,
     /// What the distance guard measures with, when it is on.
     pub(super) guard: Option<DistanceGuard>,
+    /// Per-corner attributes carried through the collapses ([`State::carry_attributes`]): the
+    /// input's values, and for each current corner (3 per face) the input corner whose values it
+    /// has. Empty when the input has none (the collapse then pays nothing for them).
+    pub(super) attributes: CornerAttributes,
+    pub(super) corner_source: Vec<u32>,
 }
 
 /// What ranking an edge reads of each endpoint, in one 128-byte block (two adjacent cache lines)
@@ -141,6 +146,8 @@ impl<'o> State<'o> {
             check_id: 0,
             cos_max_normal_change: options.max_normal_change_degrees.to_radians().cos(),
             guard: None,
+            attributes: CornerAttributes::default(),
+            corner_source: Vec::new(),
         };
         if options.guard > 0.0 {
             state.guard = DistanceGuard::new(mesh, &state.fans);
@@ -209,6 +216,34 @@ impl<'o> State<'o> {
         (state, edges)
     }
 
+    /// Carries `mesh`'s per-corner attributes (the mesh the state was made from) through the run.
+    /// A vertex whose corners differ (on a texture seam, a hard edge or a colour border) is frozen:
+    /// no collapse removes or moves it, so seams keep their place and both sides their values. A
+    /// collapse then always merges a vertex with one value per attribute into another such vertex,
+    /// and the merged corners take the survivor's values: no value is invented, and no corner
+    /// takes a value from across a seam. (Collapses along seams, and values interpolated at the
+    /// new position, are later work.) Needs the triangle array, so it is kept current from here.
+    pub(crate) fn carry_attributes(&mut self, mesh: &Mesh) {
+        if mesh.corners.is_empty() {
+            return;
+        }
+        self.attributes = mesh.corners.clone();
+        self.corner_source = (0..3 * mesh.face_count() as u32).collect();
+        if !self.track_triangles {
+            self.triangles = mesh.triangles.clone();
+            self.track_triangles = true;
+        }
+        let mut first_corner = vec![NONE; mesh.vertex_count()];
+        for (k, &v) in mesh.triangles.iter().flatten().enumerate() {
+            let first = &mut first_corner[v as usize];
+            if *first == NONE {
+                *first = k as u32;
+            } else if !mesh.corners.same(*first as usize, k) {
+                self.vertices[v as usize].kind = VertexKind::Frozen;
+            }
+        }
+    }
+
     /// Brings `triangles` up to date after a run without tracking: every corner names the vertex
     /// its input vertex was merged into, last merge first (the same as renaming at each collapse).
     /// Built from the input's triangles (`mesh`, the one the state was made from): the state
@@ -235,11 +270,14 @@ impl<'o> State<'o> {
                 positions.push(self.vertices[v].position);
             }
         }
-        let triangles: Vec<[u32; 3]> = (0..self.triangles.len())
-            .filter(|&f| self.face_alive[f])
-            .map(|f| self.triangles[f].map(|v| new_index[v as usize]))
-            .collect();
-        let mesh = Mesh { positions, triangles, corners: Default::default() };
+        let live = || (0..self.triangles.len()).filter(|&f| self.face_alive[f]);
+        let triangles: Vec<[u32; 3]> = live().map(|f| self.triangles[f].map(|v| new_index[v as usize])).collect();
+        let corners = if self.corner_source.is_empty() {
+            CornerAttributes::default()
+        } else {
+            self.attributes.pick(live().flat_map(|f| (0..3).map(move |k| self.corner_source[3 * f + k] as usize)))
+        };
+        let mesh = Mesh { positions, triangles, corners };
         debug_assert!(mesh.check().is_ok());
         mesh
     }
@@ -337,6 +375,14 @@ impl<'o> State<'o> {
                 fan.remove(i);
             }
         }
+        // The survivor's values (it has one set: vertices with more are frozen), from a dead face.
+        let survivor_source = if self.corner_source.is_empty() {
+            NONE
+        } else {
+            let f = dead[0] as usize;
+            let k = self.triangles[f].iter().position(|&v| v == a).expect("a dead face has the survivor");
+            self.corner_source[3 * f + k]
+        };
         let is_dead = |d: &Corner| (d.face == dead[0]) | (d.face == dead[1]);
         self.fans[a as usize].retain(|d| !is_dead(d));
         let moved = std::mem::take(&mut self.fans[b as usize]);
@@ -347,9 +393,12 @@ impl<'o> State<'o> {
         for corner in moved.iter().filter(|d| !is_dead(d)) {
             let f = corner.face;
             if self.track_triangles {
-                for slot in self.triangles[f as usize].iter_mut() {
+                for (k, slot) in self.triangles[f as usize].iter_mut().enumerate() {
                     if *slot == b {
                         *slot = a;
+                        if survivor_source != NONE {
+                            self.corner_source[3 * f as usize + k] = survivor_source;
+                        }
                     }
                 }
             }

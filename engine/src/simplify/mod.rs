@@ -127,6 +127,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     // 2–3. Classification and working state. Melax's cost reads face normals through the triangle
     // array; the quadric costs never do, so the array is rebuilt once at the end instead.
     let (mut state, edges) = State::with_tracking(&prepared, options, options.metric == Metric::Melax);
+    state.carry_attributes(&prepared);
     // 4. Every edge queued.
     let heap = run::initial_queue(&state, edges, faces_in);
     // 5. The loop.
