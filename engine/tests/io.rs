@@ -509,10 +509,15 @@ fn simplification_keeps_the_textured_assets_attributes_and_seams() {
     let Some(dir) = meshlod_engine::datasets::require_shared_textured("simplification_keeps_attributes") else {
         return;
     };
-    for row in textured_manifest(&dir) {
-        let mesh = read_mesh(dir.join(&row["file"])).unwrap();
+    let mut assets: Vec<std::path::PathBuf> =
+        textured_manifest(&dir).iter().map(|row| dir.join(&row["file"])).collect();
+    // spot, the shared mesh with texture seams, too.
+    assets.extend(meshlod_engine::datasets::shared_mesh("spot"));
+    for path in assets {
+        let row = std::collections::HashMap::from([("file".to_string(), path.display().to_string())]);
+        let mesh = read_mesh(&path).unwrap();
         let before = meshlod_engine::validate::validate(&mesh);
-        let options = SimplifyOptions { target_ratio: Some(0.5), ..Default::default() };
+        let options = SimplifyOptions { target_ratio: Some(0.9), ..Default::default() };
         let out = simplify(&mesh, &options).unwrap_or_else(|e| panic!("{}: {e}", row["file"]));
         let lod = &out.mesh;
         lod.check().unwrap();
@@ -536,6 +541,22 @@ fn simplification_keeps_the_textured_assets_attributes_and_seams() {
             (0..3 * mesh.face_count()).map(|k| corner_key(&mesh, k)).collect();
         for k in 0..3 * lod.face_count() {
             assert!(input.contains(&corner_key(lod, k)), "{}: corner {k} has values the input never had", row["file"]);
+        }
+        // Faces whose texture-space triangle turns counter-clockwise and clockwise.
+        let flips = |m: &Mesh| -> (usize, usize) {
+            let Some(uv) = &m.corners.uvs else { return (0, 0) };
+            let signed = |f: usize| {
+                let [a, b, c] = [uv[3 * f], uv[3 * f + 1], uv[3 * f + 2]];
+                (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+            };
+            let positive = (0..m.face_count()).filter(|&f| signed(f) > 0.0).count();
+            let negative = (0..m.face_count()).filter(|&f| signed(f) < 0.0).count();
+            (positive, negative)
+        };
+        // No texture-space triangle flips: where the input's all turn one way, so do the output's.
+        let (before_uv, after_uv) = (flips(&mesh), flips(lod));
+        if before_uv.0 == 0 || before_uv.1 == 0 {
+            assert!(after_uv.0 == 0 || after_uv.1 == 0, "{}: uv orientation {before_uv:?} → {after_uv:?}", row["file"]);
         }
         // Seams stay seams: none opens into a border (borders may only get fewer, coarser edges).
         let after = meshlod_engine::validate::validate(lod);

@@ -217,12 +217,13 @@ impl<'o> State<'o> {
     }
 
     /// Carries `mesh`'s per-corner attributes (the mesh the state was made from) through the run.
-    /// A vertex whose corners differ (on a texture seam, a hard edge or a colour border) is frozen:
-    /// no collapse removes or moves it, so seams keep their place and both sides their values. A
-    /// collapse then always merges a vertex with one value per attribute into another such vertex,
-    /// and the merged corners take the survivor's values: no value is invented, and no corner
-    /// takes a value from across a seam. (Collapses along seams, and values interpolated at the
-    /// new position, are later work.) Needs the triangle array, so it is kept current from here.
+    /// A collapse gives each corner of the removed vertex the survivor's values on the same side:
+    /// with one set of values at the removed vertex, the survivor's in the faces of the edge
+    /// (which must agree); on a seam (two sets), the edge must be a seam edge, and each side takes
+    /// the survivor's values on that side ([`State::seam_sides`], rule 7). A vertex with three or
+    /// more sets (where seams meet) is frozen. No value is invented and none crosses a seam.
+    /// (Values interpolated at the new position are later work.) Needs the triangle array, so it
+    /// is kept current from here.
     pub(crate) fn carry_attributes(&mut self, mesh: &Mesh) {
         if mesh.corners.is_empty() {
             return;
@@ -233,15 +234,90 @@ impl<'o> State<'o> {
             self.triangles = mesh.triangles.clone();
             self.track_triangles = true;
         }
-        let mut first_corner = vec![NONE; mesh.vertex_count()];
+        let mut seen = vec![[NONE; 2]; mesh.vertex_count()];
         for (k, &v) in mesh.triangles.iter().flatten().enumerate() {
-            let first = &mut first_corner[v as usize];
-            if *first == NONE {
-                *first = k as u32;
-            } else if !mesh.corners.same(*first as usize, k) {
+            let sets = &mut seen[v as usize];
+            let known = |s: u32| s != NONE && mesh.corners.same(s as usize, k);
+            if known(sets[0]) || known(sets[1]) {
+                continue;
+            }
+            if sets[0] == NONE {
+                sets[0] = k as u32;
+            } else if sets[1] == NONE {
+                sets[1] = k as u32;
+            } else {
                 self.vertices[v as usize].kind = VertexKind::Frozen;
             }
         }
+    }
+
+    /// The input corner whose values vertex `v` has in face `f`.
+    fn source_at(&self, f: u32, v: u32) -> u32 {
+        let k = self.triangles[f as usize].iter().position(|&x| x == v).expect("v is a corner of f");
+        self.corner_source[3 * f as usize + k]
+    }
+
+    /// Rule 7 for collapsing `b` into `a` over the faces `dead` (one or two) of their edge: the
+    /// values each of b's corners takes, as `(b's values, a's values)` pairs for the first and the
+    /// second side; `None` when the collapse would carry values across a seam. With one set of
+    /// values at b, both sides map it to a's values in the edge's faces, which must agree. With two
+    /// (b on a seam) the edge must have two faces that differ at b, each side maps to a's values
+    /// in its face, and those must differ too (a on the same seam). More than two: refused.
+    pub(super) fn seam_sides(&self, a: u32, b: u32, dead: &[u32]) -> Option<[(u32, u32); 2]> {
+        let same = |x: u32, y: u32| self.attributes.same(x as usize, y as usize);
+        let b_first = self.source_at(dead[0], b);
+        let a_first = self.source_at(dead[0], a);
+        let mut b_other = NONE;
+        for corner in &self.fans[b as usize] {
+            let s = self.source_at(corner.face, b);
+            if same(s, b_first) {
+                continue;
+            }
+            if b_other == NONE {
+                b_other = s;
+            } else if !same(s, b_other) {
+                return None;
+            }
+        }
+        if b_other == NONE {
+            // One set at b: a's values must be one across the edge's faces.
+            if let Some(&second) = dead.get(1)
+                && !same(self.source_at(second, a), a_first)
+            {
+                return None;
+            }
+            return Some([(b_first, a_first), (b_first, a_first)]);
+        }
+        let &[_, second] = dead else { return None };
+        let (b_second, a_second) = (self.source_at(second, b), self.source_at(second, a));
+        if same(b_second, b_first) || same(a_second, a_first) {
+            return None;
+        }
+        Some([(b_first, a_first), (b_second, a_second)])
+    }
+
+    /// Rule 7 in texture space: every face that b keeps (not in `dead`), with b's texture
+    /// coordinates replaced as `sides` says, keeps the orientation and a non-zero area of its
+    /// texture-space triangle (a flipped one would show the texture mirrored). True without
+    /// texture coordinates.
+    pub(super) fn texture_keeps_orientation(&self, b: u32, dead: &[u32; 2], sides: [(u32, u32); 2]) -> bool {
+        let Some(uv) = &self.attributes.uvs else { return true };
+        let [(b_first, a_first), (_, a_second)] = sides;
+        let area = |s: [u32; 3]| {
+            let [p, q, r] = s.map(|k| uv[k as usize].map(f64::from));
+            (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+        };
+        self.fans[b as usize].iter().filter(|c| c.face != dead[0] && c.face != dead[1]).all(|c| {
+            let f = c.face as usize;
+            let k = self.triangles[f].iter().position(|&x| x == b).expect("b is a corner of its faces");
+            let mut sources = [0, 1, 2].map(|i| self.corner_source[3 * f + i]);
+            let before = area(sources);
+            let first = self.attributes.same(sources[k] as usize, b_first as usize);
+            sources[k] = if first { a_first } else { a_second };
+            let after = area(sources);
+            // A face without texture-space area has no orientation to keep.
+            before == 0.0 || after * before > 0.0
+        })
     }
 
     /// Brings `triangles` up to date after a run without tracking: every corner names the vertex
@@ -375,13 +451,12 @@ impl<'o> State<'o> {
                 fan.remove(i);
             }
         }
-        // The survivor's values (it has one set: vertices with more are frozen), from a dead face.
-        let survivor_source = if self.corner_source.is_empty() {
-            NONE
+        // Rule 7's mapping of b's values to a's (checked legal: `is_legal` refused it otherwise).
+        let sides = if self.corner_source.is_empty() {
+            None
         } else {
-            let f = dead[0] as usize;
-            let k = self.triangles[f].iter().position(|&v| v == a).expect("a dead face has the survivor");
-            self.corner_source[3 * f + k]
+            let count = if dead[1] == NONE { 1 } else { 2 };
+            Some(self.seam_sides(a, b, &dead[..count]).expect("rule 7 was checked"))
         };
         let is_dead = |d: &Corner| (d.face == dead[0]) | (d.face == dead[1]);
         self.fans[a as usize].retain(|d| !is_dead(d));
@@ -396,8 +471,10 @@ impl<'o> State<'o> {
                 for (k, slot) in self.triangles[f as usize].iter_mut().enumerate() {
                     if *slot == b {
                         *slot = a;
-                        if survivor_source != NONE {
-                            self.corner_source[3 * f as usize + k] = survivor_source;
+                        if let Some([(b_first, a_first), (_, a_second)]) = sides {
+                            let at = 3 * f as usize + k;
+                            let first = self.attributes.same(self.corner_source[at] as usize, b_first as usize);
+                            self.corner_source[at] = if first { a_first } else { a_second };
                         }
                     }
                 }

@@ -164,6 +164,14 @@ impl State<'_> {
         if remaining < if interior { 3 } else { 1 } {
             return Err(Refusal::TooFewFaces);
         }
+        // Rule 7, with per-corner attributes only: no values carried across a seam.
+        if !self.corner_source.is_empty() {
+            let dead = [shared[0].face, if shared_count == 2 { shared[1].face } else { NONE }];
+            let sides = self.seam_sides(a, b, &dead[..shared_count]).ok_or(Refusal::Seam)?;
+            if !self.texture_keeps_orientation(b, &dead, sides) {
+                return Err(Refusal::UvFlip);
+            }
+        }
         // Rules 4–6 on each surviving face: normal change, needle, fold onto the face across.
         let p = to_f64(c.position);
         let mut fan = std::mem::take(&mut self.fan_scratch);

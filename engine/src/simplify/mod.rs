@@ -75,7 +75,11 @@
 //!    The face across is looked at only when the normal cones of the far edge's two ends
 //!    (`NormalCone`: how far the faces around a vertex stray from its normal) leave a fold
 //!    possible (rarely: counts in docs/history/benchmarks-log.md); debug builds check every skipped one
-//!    anyway.
+//!    anyway;
+//! 7. with per-corner attributes (texture coordinates, normals, colours), no values cross a seam:
+//!    b's corners take a's values on the same side, so an edge into a seam vertex must run along
+//!    the seam, and a vertex where three or more sets of values meet is frozen
+//!    (`State::carry_attributes`, `State::seam_sides`). Without attributes the rule costs nothing.
 
 mod classify;
 mod cost;

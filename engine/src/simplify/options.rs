@@ -286,6 +286,10 @@ pub struct Refusals {
     pub needle: usize,
     /// Rule 6: a moved face would fold onto a neighbour.
     pub fold: usize,
+    /// Rule 7 (meshes with per-corner attributes): the collapse would carry values across a seam.
+    pub seam: usize,
+    /// Rule 7: a face's texture-space triangle would flip or lose its area.
+    pub uv_flip: usize,
 }
 
 impl Refusals {
@@ -297,12 +301,14 @@ impl Refusals {
             Refusal::NormalChange => &mut self.normal_change,
             Refusal::Needle => &mut self.needle,
             Refusal::Fold => &mut self.fold,
+            Refusal::Seam => &mut self.seam,
+            Refusal::UvFlip => &mut self.uv_flip,
         } += 1;
     }
 
     /// All refusals.
     pub fn total(&self) -> usize {
-        self.link + self.too_few_faces + self.normal_change + self.needle + self.fold
+        self.link + self.too_few_faces + self.normal_change + self.needle + self.fold + self.seam + self.uv_flip
     }
 }
 
@@ -319,4 +325,8 @@ pub(crate) enum Refusal {
     Needle,
     /// Rule 6: a fold.
     Fold,
+    /// Rule 7: attribute values would cross a seam.
+    Seam,
+    /// Rule 7: a texture-space triangle would flip or lose its area.
+    UvFlip,
 }
