@@ -1,0 +1,117 @@
+//! Attribute-carrying simplification beside meshoptimizer's attribute-aware simplifier
+//! (`meshopt::simplify_with_attributes_and_locks`), on every shared textured asset and spot, to 10%
+//! of the faces. meshlod runs first (default options: w = 0, attributes carried, seams kept);
+//! meshoptimizer then gets meshlod's face count as its target, with the same vertices split where
+//! their attributes differ (as a GPU buffer holds them) and weights 1 for texture coordinates,
+//! 0.5 for normals. Error: the certified symmetric Hausdorff distance of the positions to the input
+//! (paper units) for both. Times: one thread, interleaved, best of 5.
+//!
+//! Run: `cargo bench -p meshlod-engine --bench attributes`.
+
+#[allow(unsafe_code, dead_code)]
+#[path = "support/mod.rs"]
+mod common;
+
+use std::path::PathBuf;
+
+use common::best_of_interleaved;
+use meshlod_engine::Mesh;
+use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
+use meshlod_engine::io::read_mesh;
+use meshlod_engine::simplify::{SimplifyOptions, simplify};
+
+/// meshoptimizer's input: `mesh`'s vertices split where their attributes differ, with the
+/// attribute stream and weights (built once, outside the timed call, as a GPU pipeline has them).
+struct PeerInput {
+    positions: Vec<[f32; 3]>,
+    bytes: Vec<u8>,
+    indices: Vec<u32>,
+    attributes: Vec<f32>,
+    weights: Vec<f32>,
+    lock: Vec<bool>,
+}
+
+fn peer_input(mesh: &Mesh) -> PeerInput {
+    let wedges = mesh.corners.wedges(&mesh.triangles, mesh.vertex_count());
+    let count = wedges.source.len();
+    let positions: Vec<[f32; 3]> = (0..count).map(|i| mesh.positions[wedges.vertex(&mesh.triangles, i)]).collect();
+    let bytes = positions.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
+    let (mut attributes, mut weights) = (Vec::new(), Vec::new());
+    let c = &mesh.corners;
+    if c.uvs.is_some() {
+        weights.extend([1.0, 1.0]);
+    }
+    if c.normals.is_some() {
+        weights.extend([0.5; 3]);
+    }
+    for &k in &wedges.source {
+        attributes.extend(c.uvs.iter().flat_map(|u| u[k]));
+        attributes.extend(c.normals.iter().flat_map(|n| n[k]));
+    }
+    if weights.is_empty() {
+        attributes = vec![0.0; count];
+        weights = vec![0.0];
+    }
+    PeerInput { positions, bytes, indices: wedges.corner_vertex, attributes, weights, lock: vec![false; count] }
+}
+
+/// meshoptimizer's attribute-aware simplifier to `target` faces: the result's indices.
+fn peer(input: &PeerInput, target: usize) -> Vec<u32> {
+    let adapter = meshopt::VertexDataAdapter::new(&input.bytes, 12, 0).expect("valid vertex data");
+    meshopt::simplify_with_attributes_and_locks(
+        &input.indices,
+        &adapter,
+        &input.attributes,
+        &input.weights,
+        input.weights.len() * 4,
+        &input.lock,
+        target * 3,
+        f32::MAX,
+        meshopt::SimplifyOptions::None,
+        None,
+    )
+}
+
+fn main() {
+    let Some(textured) = meshlod_engine::datasets::shared_textured_dir() else {
+        eprintln!("!!! shared textured assets not found (set MESHLOD_TEXTURED) !!!");
+        std::process::exit(1);
+    };
+    let manifest = std::fs::read_to_string(textured.join("MANIFEST.tsv")).expect("manifest");
+    let mut assets: Vec<PathBuf> =
+        manifest.lines().skip(1).filter_map(|l| l.split('\t').next()).map(|f| textured.join(f)).collect();
+    assets.extend(meshlod_engine::datasets::shared_mesh("spot"));
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("pool");
+    println!(
+        "| asset | attributes | faces in | meshlod faces (target) | meshopt faces | meshlod error | meshopt error | error ratio | meshlod time | meshopt time | time ratio |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
+    for path in assets {
+        let mesh = read_mesh(&path).expect("reads");
+        let options = SimplifyOptions { target_ratio: Some(0.9), ..Default::default() };
+        let input = peer_input(&mesh);
+        let ((ours, t_ours), (indices, t_theirs)) = pool.install(|| {
+            let target = simplify(&mesh, &options).expect("simplifies").mesh.face_count();
+            best_of_interleaved(5, || simplify(&mesh, &options).expect("simplifies"), || peer(&input, target))
+        });
+        let triangles = indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+        let theirs = Mesh::new(input.positions.clone(), triangles).expect("meshopt's output is a mesh");
+        let error = |m: &Mesh| hausdorff(&mesh, m, &HausdorffOptions::default()).expect("measures").hausdorff;
+        let (e_ours, e_theirs) = (error(&ours.mesh), error(&theirs));
+        println!(
+            "| {} | {} | {} | {} ({}) | {} | {:.5} | {:.5} | {:.2} | {:.1} ms | {:.1} ms | {:.2} |",
+            path.file_name().and_then(|n| n.to_str()).unwrap_or("?"),
+            mesh.corners.names().join(", "),
+            mesh.face_count(),
+            ours.mesh.face_count(),
+            ours.stats.target_faces,
+            theirs.face_count(),
+            e_ours,
+            e_theirs,
+            e_ours / e_theirs,
+            t_ours * 1e3,
+            t_theirs * 1e3,
+            t_ours / t_theirs,
+        );
+    }
+}
