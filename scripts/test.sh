@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # Runs every test of meshlod: the Rust workspace (unit, integration, CLI and gRPC end to end),
 # then the checks that need Python: the Hausdorff instrument against MeshLab's Metro, the Python
-# example client against a live server, and the deploy manifests against the Kubernetes schemas.
-# Installs what it needs: a Python virtual environment in .venv from the pinned requirements.
+# example client against a live server, the deploy manifests against the Kubernetes schemas, and
+# glTF outputs against the Khronos glTF validator (Node). Installs what it needs: a Python virtual
+# environment in .venv from the pinned requirements, the validator from npm (pinned by its lock).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export MESHLOD_MESHES="${MESHLOD_MESHES:-$(cd .. && pwd)/shared/meshes}"
+export MESHLOD_TEXTURED="${MESHLOD_TEXTURED:-$(cd .. && pwd)/shared/textured}"
 
 echo "== cargo test --workspace"
 cargo test --workspace --locked
@@ -29,6 +31,36 @@ elif [ -n "${CI:-}" ]; then
 else
   echo "!!! SKIPPED: shared meshes not found at $MESHLOD_MESHES (set MESHLOD_MESHES) !!!" >&2
 fi
+
+echo "== glTF outputs vs the Khronos glTF validator"
+(cd tools/gltf-validate && npm ci --no-audit --no-fund --silent)
+gltf_out=$(mktemp -d)
+validate() { node tools/gltf-validate/validate.js "$@"; }
+# Always: a procedural mesh, as GLB and as glTF JSON.
+"$MESHLOD" generate torus -o "$gltf_out/torus.obj" --resolution 24
+"$MESHLOD" convert "$gltf_out/torus.obj" "$gltf_out/torus.glb"
+"$MESHLOD" simplify "$gltf_out/torus.obj" -o "$gltf_out/torus-10.gltf" --ratio 0.9 > /dev/null
+validate "$gltf_out/torus.glb" "$gltf_out/torus-10.gltf"
+# Every textured asset and spot, simplified to 10% as GLB: 0 errors of their own (an error the
+# input has too, such as an image missing from its folder, is reported as inherited).
+if [ -d "$MESHLOD_TEXTURED" ] && [ -f "$MESHLOD_MESHES/spot.obj" ]; then
+  for input in "$MESHLOD_TEXTURED"/*/*.gltf "$MESHLOD_TEXTURED"/*/*.glb "$MESHLOD_TEXTURED"/*/*.obj \
+    "$MESHLOD_MESHES/spot.obj"; do
+    [ -f "$input" ] || continue
+    name=$(basename "${input%.*}")
+    "$MESHLOD" simplify "$input" -o "$gltf_out/$name-10.glb" --ratio 0.9 > /dev/null
+    case "$input" in
+      *.gltf | *.glb) validate --input "$input" "$gltf_out/$name-10.glb" ;;
+      *) validate "$gltf_out/$name-10.glb" ;;
+    esac
+  done
+elif [ -n "${CI:-}" ]; then
+  echo "textured assets not found at $MESHLOD_TEXTURED (or spot.obj in $MESHLOD_MESHES): CI must validate them" >&2
+  exit 1
+else
+  echo "!!! SKIPPED: textured assets not found at $MESHLOD_TEXTURED (set MESHLOD_TEXTURED) !!!" >&2
+fi
+rm -rf "$gltf_out"
 
 echo "== Python example client against a live server"
 port=$(.venv/bin/python -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')

@@ -397,18 +397,20 @@ fn textured_gltf_assets_convert_to_obj_with_their_attributes() {
     for asset in ["draco__Duck/Duck.gltf", "draco__CesiumMan/CesiumMan.gltf"] {
         let input = textured.join(asset);
         let info = ok_json(&["info", s(&input), "--json"]);
-        assert_eq!(info["attributes"], serde_json::json!(["normal", "uv"]), "{asset}");
+        assert_eq!(info["attributes"], serde_json::json!(["normal", "uv", "material"]), "{asset}");
         assert_eq!(
             (info["boundary_edges"].as_u64(), info["components"].as_u64()),
             (Some(0), Some(1)),
             "{asset}: one closed surface"
         );
-        let out = dir.join("asset.obj");
-        assert!(meshlod(&["convert", s(&input), s(&out)]).status.success(), "{asset}");
-        let copy = ok_json(&["info", s(&out), "--json"]);
-        for key in ["vertices", "faces", "attributes", "seam_edges"] {
-            assert_eq!(copy[key], info[key], "{asset}: {key}");
+        for out in ["asset.obj", "asset.glb", "asset.gltf"] {
+            let out = dir.join(out);
+            assert!(meshlod(&["convert", s(&input), s(&out)]).status.success(), "{asset}");
+            let copy = ok_json(&["info", s(&out), "--json"]);
+            for key in ["vertices", "faces", "attributes", "seam_edges"] {
+                assert_eq!(copy[key], info[key], "{asset} → {}: {key}", out.display());
+            }
         }
     }
-    fails_with(&["convert", s(&textured.join("draco__Duck/Duck.gltf")), s(&dir.join("duck.glb"))], "read only");
+    fails_with(&["convert", s(&textured.join("draco__Duck/Duck.gltf")), s(&dir.join("duck.stl"))], "read only");
 }

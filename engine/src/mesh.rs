@@ -41,12 +41,80 @@ impl FaceId {
 /// vertices in place); the progressive mesh and the refiner do not yet.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct CornerAttributes {
-    /// Texture coordinates per corner.
+    /// Texture coordinates per corner, with v pointing up from the image's bottom-left corner (as
+    /// OBJ, PLY and OpenGL have them) unless `uv_origin_top` says otherwise.
     pub uvs: Option<Vec<[f32; 2]>>,
+    /// True when `uvs` have v pointing down from the image's top-left corner, as glTF has them (so
+    /// that a glTF read and written again keeps its values bit for bit); writers of the other
+    /// convention write 1 − v.
+    pub uv_origin_top: bool,
     /// Normals per corner.
     pub normals: Option<Vec<[f32; 3]>>,
     /// Colours per corner, RGBA in [0, 1].
     pub colors: Option<Vec<[f32; 4]>>,
+    /// Material per corner (the same at a face's three corners): an index into `library`'s
+    /// materials, or [`NO_MATERIAL`]. A vertex where faces of two materials meet is a seam.
+    pub materials: Option<Vec<u32>>,
+    /// The materials, textures and images that `materials` refers to, as read (shared, not
+    /// copied, by every mesh made from this one).
+    pub library: Option<std::sync::Arc<MaterialLibrary>>,
+}
+
+/// The material value of a face that has none (glTF's default material).
+pub const NO_MATERIAL: u32 = u32::MAX;
+
+/// What a mesh's faces are drawn with, kept in glTF's terms so that a glTF written from the mesh
+/// draws as its input did: the input's `materials`, `textures` and `samplers` JSON arrays carried
+/// verbatim (their indices into each other stay valid), and its images with their bytes or where
+/// to find them. OBJ materials (MTL) are translated into the same terms.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MaterialLibrary {
+    /// glTF `materials`, one JSON object each.
+    pub materials: Vec<serde_json::Value>,
+    /// glTF `textures`.
+    pub textures: Vec<serde_json::Value>,
+    /// glTF `samplers`.
+    pub samplers: Vec<serde_json::Value>,
+    /// glTF `images`.
+    pub images: Vec<Image>,
+    /// Extensions the materials and textures use (glTF `extensionsUsed`), and those of them the
+    /// input required.
+    pub extensions_used: Vec<String>,
+    /// See `extensions_used`.
+    pub extensions_required: Vec<String>,
+}
+
+/// One image of a [`MaterialLibrary`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Image {
+    /// The image's JSON without `uri`, `bufferView` and `mimeType` (its name, extras, ...).
+    pub json: serde_json::Value,
+    /// Where its bytes are.
+    pub source: ImageSource,
+    /// Its media type, when known (`image/png`, `image/jpeg`, ...).
+    pub mime_type: Option<String>,
+}
+
+/// Where an image's bytes are.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ImageSource {
+    /// Held here (from a GLB's binary chunk or a data URI).
+    Bytes(Vec<u8>),
+    /// A file on disk (a relative URI resolved against the input's folder).
+    File(std::path::PathBuf),
+    /// A URI that could not be resolved (bytes that came without their folder): carried as is.
+    Uri(String),
+}
+
+impl MaterialLibrary {
+    /// The name of material `index` (its `name`, else `material{index}`).
+    pub fn material_name(&self, index: u32) -> String {
+        self.materials
+            .get(index as usize)
+            .and_then(|m| m.get("name"))
+            .and_then(|n| n.as_str())
+            .map_or_else(|| format!("material{index}"), str::to_string)
+    }
 }
 
 /// Vertices split by attributes: see [`CornerAttributes::wedges`].
@@ -81,12 +149,15 @@ impl CornerAttributes {
         if self.colors.is_some() {
             names.push("color");
         }
+        if self.materials.is_some() {
+            names.push("material");
+        }
         names
     }
 
     /// Whether there is no attribute.
     pub fn is_empty(&self) -> bool {
-        self.uvs.is_none() && self.normals.is_none() && self.colors.is_none()
+        self.uvs.is_none() && self.normals.is_none() && self.colors.is_none() && self.materials.is_none()
     }
 
     /// The attributes of the corners `kept` (corner indices), in that order.
@@ -97,7 +168,10 @@ impl CornerAttributes {
         CornerAttributes {
             uvs: pick(&self.uvs, kept.clone()),
             normals: pick(&self.normals, kept.clone()),
-            colors: pick(&self.colors, kept),
+            colors: pick(&self.colors, kept.clone()),
+            materials: pick(&self.materials, kept),
+            library: self.library.clone(),
+            uv_origin_top: self.uv_origin_top,
         }
     }
 
@@ -106,7 +180,10 @@ impl CornerAttributes {
         fn same<const N: usize>(values: &Option<Vec<[f32; N]>>, a: usize, b: usize) -> bool {
             values.as_ref().is_none_or(|v| v[a].map(f32::to_bits) == v[b].map(f32::to_bits))
         }
-        same(&self.uvs, a, b) && same(&self.normals, a, b) && same(&self.colors, a, b)
+        same(&self.uvs, a, b)
+            && same(&self.normals, a, b)
+            && same(&self.colors, a, b)
+            && self.materials.as_ref().is_none_or(|m| m[a] == m[b])
     }
 
     /// Splits the mesh's vertices where their corners differ, for formats with one value per
@@ -127,6 +204,7 @@ impl CornerAttributes {
             bits.extend(self.normals.iter().flat_map(|n| n[k].map(f32::to_bits)));
             bits.extend(self.uvs.iter().flat_map(|u| u[k].map(f32::to_bits)));
             bits.extend(self.colors.iter().flat_map(|c| c[k].map(f32::to_bits)));
+            bits.extend(self.materials.iter().map(|m| m[k]));
             bits
         };
         let mut seen: std::collections::HashMap<(u32, Vec<u32>), u32> = std::collections::HashMap::new();
@@ -140,6 +218,17 @@ impl CornerAttributes {
             })
             .collect();
         Wedges { source, corner_vertex, identity: false }
+    }
+
+    /// The texture coordinates with v pointing down (`top` true, glTF) or up (OBJ, PLY), flipped
+    /// (v → 1 − v) when stored the other way.
+    pub fn uvs_with_origin(&self, top: bool) -> Option<std::borrow::Cow<'_, [[f32; 2]]>> {
+        let uvs = self.uvs.as_deref()?;
+        Some(if top == self.uv_origin_top {
+            std::borrow::Cow::Borrowed(uvs)
+        } else {
+            std::borrow::Cow::Owned(uvs.iter().map(|&[u, v]| [u, 1.0 - v]).collect())
+        })
     }
 
     /// Checks one entry per corner and finite values; errors name the attribute and the corner.
@@ -166,7 +255,23 @@ impl CornerAttributes {
         }
         check(&self.uvs, "uv", corner_count)?;
         check(&self.normals, "normal", corner_count)?;
-        check(&self.colors, "color", corner_count)
+        check(&self.colors, "color", corner_count)?;
+        if let Some(materials) = &self.materials {
+            let reason = if materials.len() != corner_count {
+                Some(format!("{} per-corner values for {corner_count} corners", materials.len()))
+            } else if let Some(face) = materials.chunks(3).position(|m| m[0] != m[1] || m[1] != m[2]) {
+                Some(format!("face {face} has corners of different materials"))
+            } else {
+                let known = self.library.as_ref().map_or(0, |l| l.materials.len());
+                materials.iter().position(|&m| m != NO_MATERIAL && m as usize >= known).map(|corner| {
+                    format!("face {} names material {}; there are {known}", corner / 3, materials[corner])
+                })
+            };
+            if let Some(reason) = reason {
+                return Err(MeshError::InvalidParameter { name: "material", reason });
+            }
+        }
+        Ok(())
     }
 }
 

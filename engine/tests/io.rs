@@ -451,7 +451,126 @@ fn textured_assets_read_with_their_attributes_as_one_surface() {
         let back =
             read_mesh_bytes(&obj_bytes, Some(MeshFormat::Obj), Path::new("back.obj"), &ReadLimits::default()).unwrap();
         assert_eq!((&back.positions, &back.triangles), (&mesh.positions, &mesh.triangles), "{}", row["file"]);
-        assert_eq!((&back.corners.uvs, &back.corners.normals), (&mesh.corners.uvs, &mesh.corners.normals));
+        // OBJ's v points up, glTF's down: a glTF's values come back as 1 − v.
+        let uvs = mesh.corners.uvs_with_origin(false).map(|u| u.into_owned());
+        assert_eq!((&back.corners.uvs, &back.corners.normals), (&uvs, &mesh.corners.normals));
+    }
+}
+
+/// Each corner's position.
+fn corner_positions(m: &Mesh) -> Vec<[f32; 3]> {
+    m.triangles.iter().flatten().map(|&v| m.positions[v as usize]).collect()
+}
+
+#[test]
+fn gltf_round_trips_values_materials_and_images() {
+    use meshlod_engine::mesh::{Image, ImageSource, MaterialLibrary};
+    use serde_json::json;
+    let mut cube = textured_cube();
+    cube.corners.colors = Some((0..36).map(|k| [(k / 6) as f32 / 8.0, 0.5, 1.0, 1.0]).collect());
+    cube.corners.materials = Some((0..12u32).flat_map(|f| [f / 6; 3]).collect());
+    let png = b"\x89PNG\r\n\x1a\n and the rest".to_vec();
+    let library = MaterialLibrary {
+        materials: vec![
+            json!({ "name": "painted", "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }),
+            json!({ "name": "plain", "extras": { "kept": true } }),
+        ],
+        textures: vec![json!({ "source": 0 })],
+        images: vec![Image {
+            json: json!({ "name": "paint" }),
+            source: ImageSource::Bytes(png.clone()),
+            mime_type: None,
+        }],
+        ..Default::default()
+    };
+    cube.corners.library = Some(std::sync::Arc::new(library.clone()));
+    cube.check().unwrap();
+    for binary in [true, false] {
+        let mut bytes = Vec::new();
+        meshlod_engine::io::write_gltf(&mut bytes, &cube, binary, None).unwrap();
+        assert_eq!(bytes.starts_with(b"glTF"), binary);
+        let back = read_mesh_bytes(&bytes, None, Path::new("cube.glb"), &ReadLimits::default()).unwrap();
+        assert_eq!((back.vertex_count(), back.face_count()), (8, 12), "seam vertices joined back");
+        assert_eq!(corner_positions(&back), corner_positions(&cube));
+        assert_eq!(back.corners.names(), ["normal", "uv", "color", "material"]);
+        // glTF's v points down: the values written are 1 − v, and read back as they were written.
+        assert!(back.corners.uv_origin_top);
+        assert_eq!(back.corners.uvs.as_deref(), cube.corners.uvs_with_origin(true).as_deref());
+        assert_eq!((&back.corners.normals, &back.corners.colors), (&cube.corners.normals, &cube.corners.colors));
+        assert_eq!(back.corners.materials, cube.corners.materials);
+        let read = back.corners.library.as_deref().unwrap();
+        assert_eq!((&read.materials, &read.textures), (&library.materials, &library.textures));
+        assert_eq!(read.images[0].source, ImageSource::Bytes(png.clone()), "the image travels inside the file");
+        assert_eq!(read.images[0].mime_type.as_deref(), Some("image/png"));
+        assert_eq!(read.images[0].json, json!({ "name": "paint" }));
+        assert_eq!(meshlod_engine::validate::validate(&back).seam_edges, 12);
+    }
+    // Without attributes: positions and faces only, 16-bit indices, nothing invented.
+    let plain = procedural::icosphere(2);
+    let mut bytes = Vec::new();
+    write_mesh_to(&mut bytes, &plain, MeshFormat::Gltf).unwrap();
+    let back = read_mesh_bytes(&bytes, None, Path::new("plain.glb"), &ReadLimits::default()).unwrap();
+    assert_eq!((&back.positions, &back.triangles), (&plain.positions, &plain.triangles));
+    assert_eq!(back.corners.names(), ["material"], "one primitive of the default material");
+    // A material index the library does not have is refused by name.
+    let mut bad = cube.clone();
+    bad.corners.materials.as_mut().unwrap()[33..36].copy_from_slice(&[2, 2, 2]);
+    let err = bad.check().unwrap_err().to_string();
+    assert!(err.contains("face 11 names material 2"), "{err}");
+}
+
+#[test]
+fn textured_assets_come_out_as_gltf_with_their_attributes_and_textures() {
+    use meshlod_engine::mesh::ImageSource;
+    use meshlod_engine::simplify::{SimplifyOptions, simplify};
+    let Some(dir) = meshlod_engine::datasets::require_shared_textured("textured_assets_as_gltf") else { return };
+    let out_dir = tempdir("textured-gltf");
+    let mut assets: Vec<std::path::PathBuf> =
+        textured_manifest(&dir).iter().map(|row| dir.join(&row["file"])).collect();
+    assets.extend(meshlod_engine::datasets::shared_mesh("spot"));
+    for path in assets {
+        let name = path.display().to_string();
+        let mesh = read_mesh(&path).unwrap();
+        let options = SimplifyOptions { target_ratio: Some(0.9), ..Default::default() };
+        let lod = simplify(&mesh, &options).unwrap().mesh;
+        let out = out_dir.join(format!("{}.glb", path.file_stem().unwrap().to_string_lossy()));
+        write_mesh(&out, &lod).unwrap();
+        let back = read_mesh(&out).unwrap();
+        assert_eq!(back.face_count(), lod.face_count(), "{name}");
+        let mut names = mesh.corners.names();
+        if !names.contains(&"material") {
+            names.push("material");
+        }
+        assert_eq!(back.corners.names(), names, "{name}: every attribute kept");
+        assert_eq!(corner_positions(&back), corner_positions(&lod), "{name}");
+        assert_eq!(back.corners.uvs.as_deref(), lod.corners.uvs_with_origin(true).as_deref(), "{name}");
+        // Every image the input could read travels inside the GLB; one it could not (missing from
+        // its folder) is referred to from the output's folder.
+        let (Some(input), Some(output)) = (mesh.corners.library.as_deref(), back.corners.library.as_deref()) else {
+            assert!(mesh.corners.library.is_none(), "{name}: the materials were lost");
+            continue;
+        };
+        assert_eq!(output.materials.len(), input.materials.len(), "{name}");
+        assert_eq!(output.images.len(), input.images.len(), "{name}");
+        for (before, after) in input.images.iter().zip(&output.images) {
+            match &before.source {
+                ImageSource::File(file) if file.is_file() => {
+                    assert_eq!(after.source, ImageSource::Bytes(std::fs::read(file).unwrap()), "{name}");
+                }
+                ImageSource::File(file) => {
+                    let ImageSource::File(refer) = &after.source else { panic!("{name}: {:?}", after.source) };
+                    assert_eq!(refer.canonicalize().ok(), None, "{name}: {} is missing", file.display());
+                    assert_eq!(refer.file_name(), file.file_name(), "{name}");
+                }
+                other => assert_eq!(&after.source, other, "{name}"),
+            }
+        }
+        // An OBJ's MTL texture becomes the material's base colour texture.
+        if name.ends_with("capsule.obj") {
+            let material = &output.materials[0];
+            assert_eq!(material["name"], "material0");
+            assert_eq!(material["pbrMetallicRoughness"]["baseColorTexture"]["index"], 0);
+        }
     }
 }
 

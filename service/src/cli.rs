@@ -81,7 +81,7 @@ pub enum Command {
         /// Which shape.
         #[arg(value_enum)]
         shape: Shape,
-        /// Output mesh (.obj or .ply).
+        /// Output mesh (.obj, .ply, .gltf or .glb).
         #[arg(short, long)]
         output: PathBuf,
         /// Resolution: subdivision level for the sphere (at most 9; default 6: 81 920 faces), grid
@@ -97,7 +97,7 @@ pub enum Command {
     Lod {
         /// Progressive mesh written by `meshlod simplify --pm`.
         input: PathBuf,
-        /// Output mesh (.obj or .ply).
+        /// Output mesh (.obj, .ply, .gltf or .glb).
         #[arg(short, long)]
         output: PathBuf,
         /// The finest level with at most this many faces.
@@ -225,7 +225,7 @@ impl std::str::FromStr for Auto {
 pub struct SimplifyArgs {
     /// Input mesh (.obj, .ply, .stl, .off, .gltf or .glb).
     pub input: PathBuf,
-    /// Output mesh (.obj or .ply).
+    /// Output mesh (.obj, .ply, .gltf or .glb).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Keep at most this many faces.
@@ -320,7 +320,7 @@ impl SimplifyArgs {
 pub struct RefineArgs {
     /// Input mesh (.obj, .ply, .stl, .off, .gltf or .glb).
     pub input: PathBuf,
-    /// Output mesh (.obj or .ply).
+    /// Output mesh (.obj, .ply, .gltf or .glb).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Energy threshold coefficient: threshold = ETC × mean face energy; `auto` (with --faces) takes

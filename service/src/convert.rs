@@ -172,6 +172,7 @@ pub fn mesh_from_proto(m: &proto::Mesh, field: &str, limits: &MeshLimits) -> Res
         normals: per_corner(&m.normals, &format!("{field}.normals"), vertex_count, &triangles)?,
         uvs: per_corner(&m.uvs, &format!("{field}.uvs"), vertex_count, &triangles)?,
         colors: per_corner(&m.colors, &format!("{field}.colors"), vertex_count, &triangles)?,
+        ..Default::default()
     };
     let mut mesh = Mesh::new(positions, triangles).map_err(|e| invalid(field, e.to_string()))?;
     mesh.corners = corners;
@@ -181,7 +182,13 @@ pub fn mesh_from_proto(m: &proto::Mesh, field: &str, limits: &MeshLimits) -> Res
 /// Converts an engine mesh to the contract: attributes per vertex, a vertex whose corners differ
 /// (a seam) once per distinct value.
 pub fn mesh_to_proto(mesh: &Mesh) -> proto::Mesh {
-    let c = &mesh.corners;
+    // The contract has no materials: vertices are split by their values only.
+    let unmaterialed;
+    let mut c = &mesh.corners;
+    if c.materials.is_some() {
+        unmaterialed = meshlod_engine::mesh::CornerAttributes { materials: None, library: None, ..c.clone() };
+        c = &unmaterialed;
+    }
     if c.is_empty() {
         return proto::Mesh {
             positions: mesh.positions.iter().flatten().copied().collect(),
@@ -197,7 +204,7 @@ pub fn mesh_to_proto(mesh: &Mesh) -> proto::Mesh {
         positions: (0..wedges.source.len()).flat_map(|i| mesh.positions[wedges.vertex(&mesh.triangles, i)]).collect(),
         indices: wedges.corner_vertex.clone(),
         normals: flat(&c.normals, &wedges.source),
-        uvs: flat(&c.uvs, &wedges.source),
+        uvs: flat(&c.uvs_with_origin(false).map(|u| u.into_owned()), &wedges.source),
         colors: flat(&c.colors, &wedges.source),
     }
 }

@@ -24,7 +24,7 @@ use gltf::mesh::Mode;
 
 use super::ReadLimits;
 use crate::error::MeshError;
-use crate::mesh::{CornerAttributes, Mesh};
+use crate::mesh::{CornerAttributes, Image, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL};
 
 /// Extensions whose data meshlod cannot decode; a file that requires one is refused by name.
 const UNSUPPORTED: [&str; 3] = ["KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_mesh_quantization"];
@@ -45,6 +45,7 @@ struct Part {
     normals: Option<Vec<[f32; 3]>>,
     uvs: Option<Vec<[f32; 2]>>,
     colors: Option<Vec<[f32; 4]>>,
+    material: u32,
 }
 
 /// Reads glTF or GLB bytes. `folder`: where relative buffer URIs are resolved (the file's folder);
@@ -126,6 +127,7 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
     for accessor in document.accessors() {
         check_accessor(&accessor).map_err(|reason| err(&format!("accessor {}", accessor.index()), reason))?;
     }
+    let library = library(json, document, &buffers, folder).map_err(|(at, reason)| err(&at, reason))?;
 
     // Mesh instances with their world transforms.
     let mut instances: Vec<(gltf::Mesh, DMat4)> = Vec::new();
@@ -178,7 +180,83 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
             parts.push(part);
         }
     }
-    merge(parts, path)
+    merge(parts, library, path)
+}
+
+/// The document's materials, textures, samplers and images, for a glTF written from the mesh.
+/// Image bytes held in a buffer are copied; external ones are found next to the file (read when
+/// written), or kept as their URI when the bytes came without a folder.
+fn library(
+    json: &[u8],
+    document: &gltf::Document,
+    buffers: &[Vec<u8>],
+    folder: Option<&Path>,
+) -> Result<MaterialLibrary, (String, String)> {
+    let raw: serde_json::Value = serde_json::from_slice(json).map_err(|e| ("document".to_string(), e.to_string()))?;
+    let array = |key: &str| raw.get(key).and_then(|v| v.as_array()).cloned().unwrap_or_default();
+    let mut images = Vec::new();
+    for (image, mut json) in document.images().zip(array("images")) {
+        let at = format!("image {}", image.index());
+        let mime_type = json.get("mimeType").and_then(|m| m.as_str()).map(str::to_string);
+        if let Some(object) = json.as_object_mut() {
+            for key in ["uri", "bufferView", "mimeType"] {
+                object.remove(key);
+            }
+        }
+        let (source, mime_type) = match image.source() {
+            gltf::image::Source::View { view, mime_type } => {
+                let start = view.offset();
+                let bytes = buffers[view.buffer().index()][start..start + view.length()].to_vec();
+                (ImageSource::Bytes(bytes), Some(mime_type.to_string()))
+            }
+            gltf::image::Source::Uri { uri, .. } => {
+                if let Some(rest) = uri.strip_prefix("data:") {
+                    let (kind, payload) =
+                        rest.split_once(";base64,").ok_or_else(|| (at.clone(), "data URI is not base64".into()))?;
+                    let bytes = base64::engine::general_purpose::STANDARD
+                        .decode(payload)
+                        .map_err(|e| (at.clone(), format!("data URI: {e}")))?;
+                    (ImageSource::Bytes(bytes), Some(kind.to_string()).filter(|k| !k.is_empty()).or(mime_type))
+                } else if let Some(folder) = folder {
+                    (ImageSource::File(folder.join(uri.replace("%20", " "))), mime_type)
+                } else {
+                    (ImageSource::Uri(uri.to_string()), mime_type)
+                }
+            }
+        };
+        images.push(Image { json, source, mime_type });
+    }
+    let strings =
+        |key: &str| -> Vec<String> { array(key).iter().filter_map(|v| v.as_str().map(str::to_string)).collect() };
+    // The extensions that what is carried can use: those named inside materials, textures,
+    // samplers and images (a light or a mesh-level extension is not carried).
+    let (materials, textures, samplers) = (array("materials"), array("textures"), array("samplers"));
+    let mut named = Vec::new();
+    for value in materials.iter().chain(&textures).chain(&samplers).chain(images.iter().map(|i| &i.json)) {
+        collect_extensions(value, &mut named);
+    }
+    let extensions_used: Vec<String> = strings("extensionsUsed").into_iter().filter(|e| named.contains(e)).collect();
+    let extensions_required =
+        strings("extensionsRequired").into_iter().filter(|e| extensions_used.contains(e)).collect();
+    Ok(MaterialLibrary { materials, textures, samplers, images, extensions_used, extensions_required })
+}
+
+/// Every key of every `extensions` object inside `value`.
+fn collect_extensions(value: &serde_json::Value, out: &mut Vec<String>) {
+    match value {
+        serde_json::Value::Object(object) => {
+            for (key, inner) in object {
+                if key == "extensions"
+                    && let Some(names) = inner.as_object()
+                {
+                    out.extend(names.keys().cloned());
+                }
+                collect_extensions(inner, out);
+            }
+        }
+        serde_json::Value::Array(items) => items.iter().for_each(|v| collect_extensions(v, out)),
+        _ => {}
+    }
 }
 
 /// Whether a primitive mode describes a surface.
@@ -286,11 +364,12 @@ fn read_primitive(primitive: &gltf::Primitive, buffers: &[Vec<u8>], world: &DMat
     });
     let uvs = uvs.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let colors = colors.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
-    Ok(Part { positions, triangles, normals, uvs, colors })
+    let material = primitive.material().index().map_or(NO_MATERIAL, |m| m as u32);
+    Ok(Part { positions, triangles, normals, uvs, colors, material })
 }
 
 /// Joins the parts into one mesh; an attribute is kept when every part has it.
-fn merge(parts: Vec<Part>, path: &Path) -> Result<Mesh, MeshError> {
+fn merge(parts: Vec<Part>, library: MaterialLibrary, path: &Path) -> Result<Mesh, MeshError> {
     let keep_normals = parts.iter().all(|p| p.normals.is_some());
     let keep_uvs = parts.iter().all(|p| p.uvs.is_some());
     let keep_colors = parts.iter().all(|p| p.colors.is_some());
@@ -299,8 +378,14 @@ fn merge(parts: Vec<Part>, path: &Path) -> Result<Mesh, MeshError> {
         normals: keep_normals.then(Vec::new),
         uvs: keep_uvs.then(Vec::new),
         colors: keep_colors.then(Vec::new),
+        materials: Some(Vec::new()),
+        library: Some(std::sync::Arc::new(library)),
+        uv_origin_top: true,
     };
     for part in parts {
+        if let Some(all) = &mut corners.materials {
+            all.extend(std::iter::repeat_n(part.material, 3 * part.triangles.len()));
+        }
         let offset = mesh.positions.len() as u32;
         mesh.positions.extend(part.positions);
         mesh.triangles.extend(part.triangles.iter().map(|t| t.map(|v| v + offset)));

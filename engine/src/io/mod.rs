@@ -1,11 +1,13 @@
-//! Reading and writing meshes: OBJ and PLY (ascii, binary little and big endian) in and out; STL
-//! (binary and ascii), OFF (ascii) and glTF 2.0 (`.gltf`, `.glb`) in.
+//! Reading and writing meshes: OBJ, PLY (ascii, binary little and big endian) and glTF 2.0
+//! (`.gltf`, `.glb`) in and out; STL (binary and ascii) and OFF (ascii) in.
 //!
 //! Readers treat every file as untrusted: nothing is allocated from a header count before the data
 //! that backs it has been seen, every index is range-checked, every coordinate must be finite, and
 //! errors name the file and the line, byte or element at fault.
 
 mod gltf;
+mod gltf_write;
+mod mtl;
 mod obj;
 mod off;
 mod ply;
@@ -23,6 +25,7 @@ use crate::error::MeshError;
 use crate::mesh::Mesh;
 
 pub use gltf::read_gltf;
+pub use gltf_write::write_gltf;
 pub use obj::{read_obj, write_obj};
 pub use off::read_off;
 pub use ply::{read_ply, write_ply};
@@ -39,7 +42,8 @@ pub enum MeshFormat {
     Stl,
     /// Object File Format, ascii (read only).
     Off,
-    /// glTF 2.0, `.gltf` (JSON) or `.glb` (binary container) (read only for now).
+    /// glTF 2.0, `.gltf` (JSON) or `.glb` (binary container); written as GLB to a stream, and as
+    /// the file's extension says to a file.
     Gltf,
 }
 
@@ -59,7 +63,7 @@ impl MeshFormat {
 
     /// Whether meshlod can write this format (STL and OFF are read only).
     pub fn writable(self) -> bool {
-        matches!(self, MeshFormat::Obj | MeshFormat::Ply)
+        matches!(self, MeshFormat::Obj | MeshFormat::Ply | MeshFormat::Gltf)
     }
 
     /// Format recognised from a file's bytes: PLY and OFF have a magic word, binary STL a size
@@ -150,7 +154,7 @@ pub fn read_mesh_bytes(
         reason: "neither the extension nor the content says OBJ, PLY, STL, OFF or glTF".into(),
     })?;
     match format {
-        MeshFormat::Obj => read_obj(bytes, name, limits),
+        MeshFormat::Obj => read_obj(bytes, name, None, limits),
         MeshFormat::Ply => read_ply(bytes, name, limits),
         MeshFormat::Stl => read_stl(bytes, name, limits),
         MeshFormat::Off => read_off(bytes, name, limits),
@@ -169,21 +173,26 @@ pub fn read_mesh_with_limits(path: impl AsRef<Path>, limits: &ReadLimits) -> Res
     let path = path.as_ref();
     let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
     let format = MeshFormat::from_extension(path).or_else(|| MeshFormat::sniff(&bytes));
-    if format == Some(MeshFormat::Gltf) {
-        // A file on disk: its external buffers are resolved next to it.
-        return read_gltf(&bytes, path, Some(path.parent().unwrap_or(Path::new("."))), limits);
+    // A file on disk: its external buffers, images and material files are found next to it.
+    let folder = path.parent().map(|p| if p.as_os_str().is_empty() { Path::new(".") } else { p });
+    match format {
+        Some(MeshFormat::Gltf) => return read_gltf(&bytes, path, folder, limits),
+        Some(MeshFormat::Obj) => return read_obj(&bytes, path, folder, limits),
+        _ => {}
     }
     read_mesh_bytes(&bytes, format, path, limits)
 }
 
-/// Writes a mesh in the given format to any writer; `Unsupported` for a read-only format.
+/// Writes a mesh in the given format to any writer (glTF as GLB, its images embedded);
+/// `Unsupported` for a read-only format.
 pub fn write_mesh_to(mut out: impl Write, mesh: &Mesh, format: MeshFormat) -> std::io::Result<()> {
     match format {
         MeshFormat::Obj => write_obj(&mut out, mesh),
         MeshFormat::Ply => write_ply(&mut out, mesh),
-        MeshFormat::Stl | MeshFormat::Off | MeshFormat::Gltf => Err(std::io::Error::new(
+        MeshFormat::Gltf => write_gltf(&mut out, mesh, true, None),
+        MeshFormat::Stl | MeshFormat::Off => Err(std::io::Error::new(
             std::io::ErrorKind::Unsupported,
-            format!("{format:?} is read only: write .obj or .ply"),
+            format!("{format:?} is read only: write .obj, .ply, .gltf or .glb"),
         )),
     }
 }
@@ -195,7 +204,7 @@ pub fn output_format(path: impl AsRef<Path>) -> Result<MeshFormat, MeshError> {
     let format =
         MeshFormat::from_extension(path).filter(|f| f.writable()).ok_or_else(|| MeshError::UnsupportedFormat {
             path: PathBuf::from(path),
-            reason: "output extension must be .obj or .ply (STL, OFF and glTF are read only)".into(),
+            reason: "output extension must be .obj, .ply, .gltf or .glb (STL and OFF are read only)".into(),
         })?;
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty())
         && !parent.is_dir()
@@ -205,12 +214,18 @@ pub fn output_format(path: impl AsRef<Path>) -> Result<MeshFormat, MeshError> {
     Ok(format)
 }
 
-/// Writes a mesh to a file whose extension (`.obj` or `.ply`) picks the format.
+/// Writes a mesh to a file whose extension (`.obj`, `.ply`, `.gltf`, `.glb`) picks the format.
 pub fn write_mesh(path: impl AsRef<Path>, mesh: &Mesh) -> Result<(), MeshError> {
     let path = path.as_ref();
     let format = output_format(path)?;
     let file = std::fs::File::create(path).map_err(|e| io_error(path, e))?;
     let mut writer = std::io::BufWriter::new(file);
-    write_mesh_to(&mut writer, mesh, format).map_err(|e| io_error(path, e))?;
+    if format == MeshFormat::Gltf {
+        let binary = !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gltf"));
+        let folder = path.parent().map(|p| if p.as_os_str().is_empty() { Path::new(".") } else { p });
+        write_gltf(&mut writer, mesh, binary, folder).map_err(|e| io_error(path, e))?;
+    } else {
+        write_mesh_to(&mut writer, mesh, format).map_err(|e| io_error(path, e))?;
+    }
     writer.flush().map_err(|e| io_error(path, e))
 }

@@ -15,7 +15,7 @@ use glam::DVec3;
 use super::ReadLimits;
 use super::triangulate::triangulate_polygon;
 use crate::error::MeshError;
-use crate::mesh::{CornerAttributes, Mesh};
+use crate::mesh::{CornerAttributes, Mesh, NO_MATERIAL};
 
 /// One polygon corner as written in the file, resolved to 0-based indices.
 #[derive(Clone, Copy)]
@@ -73,8 +73,9 @@ fn resolve(token: &str, seen: usize, path: &Path, line: usize) -> Result<i64, Me
     }
 }
 
-/// Reads an OBJ file's bytes.
-pub fn read_obj(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, MeshError> {
+/// Reads an OBJ file's bytes. `folder`: where `mtllib` files are found (the file's folder); with
+/// `None` (bytes from the network) materials keep their names only.
+pub fn read_obj(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -> Result<Mesh, MeshError> {
     let text = std::str::from_utf8(bytes).map_err(|e| {
         let line = bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count() + 1;
         MeshError::parse(path, format!("line {line}"), "not valid UTF-8 text (binary file?)")
@@ -93,6 +94,11 @@ pub fn read_obj(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
     let mut polygon: Vec<Corner> = Vec::new();
     let mut polygon_points: Vec<DVec3> = Vec::new();
     let mut local_triangles: Vec<[usize; 3]> = Vec::new();
+    // `usemtl` names in order of first use, the one in force, and each triangle's.
+    let mut material_names: Vec<String> = Vec::new();
+    let mut material = NO_MATERIAL;
+    let mut triangle_materials: Vec<u32> = Vec::new();
+    let mut libraries: Vec<String> = Vec::new();
 
     for (line_index, raw_line) in text.lines().enumerate() {
         let line = line_index + 1;
@@ -181,9 +187,21 @@ pub fn read_obj(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
                     }
                     triangles.push(tri);
                     triangle_lines.push(line as u32);
+                    triangle_materials.push(material);
                 }
             }
-            _ => {} // o, g, s, usemtl, mtllib, l, p, comments: not geometry we keep
+            "usemtl" => {
+                let name = raw_line.trim()["usemtl".len()..].trim().to_string();
+                material = match material_names.iter().position(|n| *n == name) {
+                    Some(i) => i as u32,
+                    None => {
+                        material_names.push(name);
+                        material_names.len() as u32 - 1
+                    }
+                };
+            }
+            "mtllib" => libraries.push(raw_line.trim()["mtllib".len()..].trim().to_string()),
+            _ => {} // o, g, s, l, p, comments: not geometry we keep
         }
     }
 
@@ -216,6 +234,10 @@ pub fn read_obj(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
         lookup(&corner_normal, normals.len(), "normal")?;
         corners.normals = Some(corner_normal.iter().map(|&i| normals[i as usize]).collect());
     }
+    if !material_names.is_empty() {
+        corners.materials = Some(triangle_materials.iter().flat_map(|&m| [m; 3]).collect());
+        corners.library = Some(std::sync::Arc::new(super::mtl::library(&material_names, &libraries, folder)));
+    }
     let mesh = Mesh { positions, triangles, corners };
     debug_assert!(mesh.check().is_ok());
     Ok(mesh)
@@ -246,7 +268,7 @@ pub fn write_obj(out: &mut impl Write, mesh: &Mesh) -> std::io::Result<()> {
             .collect();
         Some((distinct, index))
     }
-    let uvs = table(&mesh.corners.uvs);
+    let uvs = table(&mesh.corners.uvs_with_origin(false).map(|u| u.into_owned()));
     let normals = table(&mesh.corners.normals);
     for uv in uvs.iter().flat_map(|(d, _)| d) {
         writeln!(out, "vt {} {}", uv[0], uv[1])?;
@@ -254,7 +276,16 @@ pub fn write_obj(out: &mut impl Write, mesh: &Mesh) -> std::io::Result<()> {
     for n in normals.iter().flat_map(|(d, _)| d) {
         writeln!(out, "vn {} {} {}", n[0], n[1], n[2])?;
     }
+    let mut material = NO_MATERIAL;
     for (f, t) in mesh.triangles.iter().enumerate() {
+        // Material names as `usemtl` (the MTL file itself is not written).
+        if let (Some(materials), Some(library)) = (&mesh.corners.materials, &mesh.corners.library)
+            && materials[3 * f] != material
+            && materials[3 * f] != NO_MATERIAL
+        {
+            material = materials[3 * f];
+            writeln!(out, "usemtl {}", library.material_name(material))?;
+        }
         write!(out, "f")?;
         for (k, &v) in t.iter().enumerate() {
             let c = 3 * f + k;

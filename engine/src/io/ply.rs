@@ -478,6 +478,7 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
         uvs: per_corner(uvs, vertex_count, &triangles),
         normals: per_corner(normals, vertex_count, &triangles),
         colors: per_corner(colors, vertex_count, &triangles),
+        ..Default::default()
     };
     let mut mesh = Mesh { positions, triangles, corners };
     if !mesh.corners.is_empty() {
@@ -497,6 +498,9 @@ pub fn write_ply(out: &mut impl Write, mesh: &Mesh) -> std::io::Result<()> {
     let c = &mesh.corners;
     // PLY colours are bytes: values that make the same bytes make one vertex.
     let mut quantised = c.clone();
+    // PLY has no materials: a vertex is split by its values only.
+    quantised.materials = None;
+    let uvs = c.uvs_with_origin(false);
     if let Some(colors) = &mut quantised.colors {
         colors.iter_mut().for_each(|col| *col = col.map(|x| colour_byte(x) as f32));
     }
@@ -523,7 +527,7 @@ pub fn write_ply(out: &mut impl Write, mesh: &Mesh) -> std::io::Result<()> {
         let floats = mesh.positions[v]
             .into_iter()
             .chain(c.normals.iter().flat_map(|n| n[k]))
-            .chain(c.uvs.iter().flat_map(|u| u[k]));
+            .chain(uvs.iter().flat_map(|u| u[k]));
         for f in floats {
             buf.extend_from_slice(&f.to_le_bytes());
         }

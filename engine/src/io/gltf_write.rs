@@ -1,0 +1,330 @@
+//! glTF 2.0 writer: `.glb` (binary container) or `.gltf` (JSON with the buffer embedded).
+//!
+//! The mesh becomes one node with one mesh, one TRIANGLES primitive per material (positions are
+//! already placed in the world by the reader, so no transform is needed). Vertices are split where
+//! their corners differ ([`crate::mesh::CornerAttributes::wedges`]), so seams and hard edges come
+//! out as glTF expects them, and the primitives share the vertex accessors. Indices are 16-bit when
+//! the vertices fit, else 32-bit. The input's materials, textures, samplers and images are carried
+//! verbatim ([`MaterialLibrary`]); images are embedded in the buffer, so the output draws without
+//! the input's folder. An image whose file cannot be read is kept as a URI relative to the output
+//! (and named in the error when there is no output folder to point from).
+
+use std::io::Write;
+use std::path::{Component, Path, PathBuf};
+
+use base64::Engine as _;
+use serde_json::{Value, json};
+
+use crate::mesh::{ImageSource, MaterialLibrary, Mesh, NO_MATERIAL};
+
+const ARRAY_BUFFER: u32 = 34962;
+const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+const FLOAT: u32 = 5126;
+const UNSIGNED_SHORT: u32 = 5123;
+const UNSIGNED_INT: u32 = 5125;
+
+/// The binary buffer being assembled, with its bufferViews.
+#[derive(Default)]
+struct Buffer {
+    bytes: Vec<u8>,
+    views: Vec<Value>,
+}
+
+impl Buffer {
+    /// Appends `data` as a new bufferView (4-byte aligned), returning its index.
+    fn view(&mut self, data: &[u8], target: Option<u32>) -> usize {
+        while !self.bytes.len().is_multiple_of(4) {
+            self.bytes.push(0);
+        }
+        let mut view = json!({ "buffer": 0, "byteOffset": self.bytes.len(), "byteLength": data.len() });
+        if let Some(target) = target {
+            view["target"] = json!(target);
+        }
+        self.bytes.extend_from_slice(data);
+        self.views.push(view);
+        self.views.len() - 1
+    }
+}
+
+fn floats<const N: usize>(values: impl Iterator<Item = [f32; N]>) -> Vec<u8> {
+    values.flat_map(|v| v.into_iter().flat_map(f32::to_le_bytes)).collect()
+}
+
+/// Writes `mesh` as glTF: GLB when `binary`, else JSON with a data-URI buffer. `folder`: where the
+/// output goes, to point at images that cannot be embedded.
+pub fn write_gltf(mut out: impl Write, mesh: &Mesh, binary: bool, folder: Option<&Path>) -> std::io::Result<()> {
+    let corners = &mesh.corners;
+    let wedges = corners.wedges(&mesh.triangles, mesh.vertex_count());
+    let count = wedges.source.len();
+    let vertex = |i: usize| wedges.vertex(&mesh.triangles, i);
+    let mut buffer = Buffer::default();
+    let mut accessors: Vec<Value> = Vec::new();
+    let mut attributes = serde_json::Map::new();
+
+    // Positions, with the exact min and max the validator checks.
+    let positions: Vec<[f32; 3]> = (0..count).map(|i| mesh.positions[vertex(i)]).collect();
+    let (mut min, mut max) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for p in &positions {
+        for k in 0..3 {
+            min[k] = min[k].min(p[k]);
+            max[k] = max[k].max(p[k]);
+        }
+    }
+    let view = buffer.view(&floats(positions.into_iter()), Some(ARRAY_BUFFER));
+    let mut position = json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC3" });
+    if count > 0 {
+        position["min"] = json!(min);
+        position["max"] = json!(max);
+    }
+    accessors.push(position);
+    attributes.insert("POSITION".into(), json!(accessors.len() - 1));
+
+    // A corner's values (wedges come from corners unless there are no attributes at all).
+    if let Some(normals) = &corners.normals {
+        let values = (0..count).map(|i| unit(normals[wedges.source[i]]));
+        let view = buffer.view(&floats(values), Some(ARRAY_BUFFER));
+        accessors.push(json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC3" }));
+        attributes.insert("NORMAL".into(), json!(accessors.len() - 1));
+    }
+    if let Some(uvs) = corners.uvs_with_origin(true) {
+        let view = buffer.view(&floats((0..count).map(|i| uvs[wedges.source[i]])), Some(ARRAY_BUFFER));
+        accessors.push(json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC2" }));
+        attributes.insert("TEXCOORD_0".into(), json!(accessors.len() - 1));
+    }
+    if let Some(colors) = &corners.colors {
+        let values = (0..count).map(|i| colors[wedges.source[i]].map(|c| c.clamp(0.0, 1.0)));
+        let view = buffer.view(&floats(values), Some(ARRAY_BUFFER));
+        accessors.push(json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC4" }));
+        attributes.insert("COLOR_0".into(), json!(accessors.len() - 1));
+    }
+
+    // One primitive per material, in the order materials first appear; indices in one view.
+    let material_of = |f: usize| corners.materials.as_ref().map_or(NO_MATERIAL, |m| m[3 * f]);
+    let mut groups: Vec<(u32, Vec<usize>)> = Vec::new();
+    for f in 0..mesh.face_count() {
+        let m = material_of(f);
+        match groups.iter_mut().find(|(g, _)| *g == m) {
+            Some((_, faces)) => faces.push(f),
+            None => groups.push((m, vec![f])),
+        }
+    }
+    // 0xFFFF is a primitive-restart value for 16-bit indices: 32-bit from there.
+    let wide = count >= 0xFFFF;
+    let mut index_bytes = Vec::new();
+    let mut primitives = Vec::new();
+    let mut index_accessors = Vec::new();
+    for (material, faces) in &groups {
+        let offset = index_bytes.len();
+        for &f in faces {
+            for k in 0..3 {
+                let v = wedges.corner_vertex[3 * f + k];
+                if wide {
+                    index_bytes.extend_from_slice(&v.to_le_bytes());
+                } else {
+                    index_bytes.extend_from_slice(&(v as u16).to_le_bytes());
+                }
+            }
+        }
+        index_accessors.push((offset, 3 * faces.len()));
+        let mut primitive = json!({ "attributes": attributes.clone(), "mode": 4 });
+        if *material != NO_MATERIAL {
+            primitive["material"] = json!(material);
+        }
+        primitives.push(primitive);
+    }
+    if !index_bytes.is_empty() {
+        let view = buffer.view(&index_bytes, Some(ELEMENT_ARRAY_BUFFER));
+        for ((offset, n), primitive) in index_accessors.into_iter().zip(&mut primitives) {
+            let component = if wide { UNSIGNED_INT } else { UNSIGNED_SHORT };
+            accessors.push(
+                json!({ "bufferView": view, "byteOffset": offset, "componentType": component, "count": n, "type": "SCALAR" }),
+            );
+            primitive["indices"] = json!(accessors.len() - 1);
+        }
+    }
+
+    let mut document = json!({
+        "asset": { "version": "2.0", "generator": concat!("meshlod ", env!("CARGO_PKG_VERSION")) },
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0 }],
+        "meshes": [{ "primitives": primitives }],
+        "accessors": accessors,
+    });
+    if let Some(library) = &corners.library {
+        add_library(&mut document, library, &mut buffer, folder)?;
+    }
+    document["bufferViews"] = json!(buffer.views);
+    let length = buffer.bytes.len();
+    if binary {
+        document["buffers"] = json!([{ "byteLength": length }]);
+        let mut text = serde_json::to_vec(&document).map_err(std::io::Error::other)?;
+        while !text.len().is_multiple_of(4) {
+            text.push(b' ');
+        }
+        let mut bin = buffer.bytes;
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        let total = 12 + 8 + text.len() + 8 + bin.len();
+        let total = u32::try_from(total).map_err(|_| std::io::Error::other("the GLB would exceed 4 GiB"))?;
+        out.write_all(b"glTF")?;
+        out.write_all(&2u32.to_le_bytes())?;
+        out.write_all(&total.to_le_bytes())?;
+        out.write_all(&(text.len() as u32).to_le_bytes())?;
+        out.write_all(b"JSON")?;
+        out.write_all(&text)?;
+        out.write_all(&(bin.len() as u32).to_le_bytes())?;
+        out.write_all(b"BIN\0")?;
+        out.write_all(&bin)
+    } else {
+        let data = base64::engine::general_purpose::STANDARD.encode(&buffer.bytes);
+        document["buffers"] =
+            json!([{ "byteLength": length, "uri": format!("data:application/octet-stream;base64,{data}") }]);
+        serde_json::to_writer_pretty(&mut out, &document).map_err(std::io::Error::other)?;
+        out.write_all(b"\n")
+    }
+}
+
+/// A normal of unit length (glTF requires it): kept bit for bit when it already is one.
+fn unit(n: [f32; 3]) -> [f32; 3] {
+    let length = n.iter().map(|&c| f64::from(c) * f64::from(c)).sum::<f64>().sqrt();
+    if (length - 1.0).abs() < 1e-4 {
+        n
+    } else if length > 0.0 {
+        n.map(|c| (f64::from(c) / length) as f32)
+    } else {
+        [0.0, 0.0, 1.0]
+    }
+}
+
+/// Copies the library's materials, textures, samplers and images into `document`, embedding every
+/// image whose bytes are at hand.
+fn add_library(
+    document: &mut Value,
+    library: &MaterialLibrary,
+    buffer: &mut Buffer,
+    folder: Option<&Path>,
+) -> std::io::Result<()> {
+    let mut images = Vec::new();
+    for (index, image) in library.images.iter().enumerate() {
+        let mut json = image.json.clone();
+        if !json.is_object() {
+            json = json!({});
+        }
+        let bytes = match &image.source {
+            ImageSource::Bytes(bytes) => Some(bytes.clone()),
+            ImageSource::File(path) => std::fs::read(path).ok(),
+            ImageSource::Uri(_) => None,
+        };
+        let mime = bytes.as_deref().and_then(sniff_image).map(str::to_string).or_else(|| image.mime_type.clone());
+        match (bytes, mime) {
+            (Some(bytes), Some(mime)) => {
+                json["bufferView"] = json!(buffer.view(&bytes, None));
+                json["mimeType"] = json!(mime);
+            }
+            _ => {
+                let uri = match &image.source {
+                    ImageSource::Uri(uri) => uri.clone(),
+                    ImageSource::File(path) => relative_uri(path, folder).ok_or_else(|| {
+                        std::io::Error::other(format!(
+                            "image {index} ('{}') cannot be read, and there is no output folder to refer to it from",
+                            path.display()
+                        ))
+                    })?,
+                    ImageSource::Bytes(_) => {
+                        return Err(std::io::Error::other(format!("image {index} is of an unknown type")));
+                    }
+                };
+                json["uri"] = json!(uri);
+            }
+        }
+        images.push(json);
+    }
+    let mut put = |key: &str, values: Vec<Value>| {
+        if !values.is_empty() {
+            document[key] = Value::Array(values);
+        }
+    };
+    put("materials", library.materials.clone());
+    put("textures", library.textures.clone());
+    put("samplers", library.samplers.clone());
+    put("images", images);
+    let strings = |v: &[String]| v.iter().map(|s| json!(s)).collect::<Vec<_>>();
+    put("extensionsUsed", strings(&library.extensions_used));
+    put("extensionsRequired", strings(&library.extensions_required));
+    Ok(())
+}
+
+/// The media type of image bytes, from their magic numbers.
+fn sniff_image(bytes: &[u8]) -> Option<&'static str> {
+    if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
+        Some("image/png")
+    } else if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
+        Some("image/jpeg")
+    } else if bytes.len() >= 12 && &bytes[..4] == b"RIFF" && &bytes[8..12] == b"WEBP" {
+        Some("image/webp")
+    } else if bytes.starts_with(b"\xABKTX 20\xBB\r\n\x1a\n") {
+        Some("image/ktx2")
+    } else {
+        None
+    }
+}
+
+/// `path` as a URI relative to `folder` (both made absolute first), spaces and the like escaped.
+fn relative_uri(path: &Path, folder: Option<&Path>) -> Option<String> {
+    let absolute = |p: &Path| -> Option<PathBuf> {
+        let p = if p.is_absolute() { p.to_path_buf() } else { std::env::current_dir().ok()?.join(p) };
+        // Resolve `.` and `..` by hand: the file may not exist.
+        let mut out = PathBuf::new();
+        for c in p.components() {
+            match c {
+                Component::ParentDir => {
+                    out.pop();
+                }
+                Component::CurDir => {}
+                other => out.push(other),
+            }
+        }
+        Some(out)
+    };
+    let (target, base) = (absolute(path)?, absolute(folder?)?);
+    let (t, b): (Vec<_>, Vec<_>) = (target.components().collect(), base.components().collect());
+    let common = t.iter().zip(&b).take_while(|(x, y)| x == y).count();
+    let mut parts: Vec<String> = vec!["..".into(); b.len() - common];
+    parts.extend(t[common..].iter().map(|c| c.as_os_str().to_string_lossy().into_owned()));
+    let joined = parts.join("/");
+    let mut uri = String::new();
+    for ch in joined.chars() {
+        match ch {
+            'A'..='Z' | 'a'..='z' | '0'..='9' | '-' | '_' | '.' | '~' | '/' => uri.push(ch),
+            other => {
+                let mut utf8 = [0u8; 4];
+                for byte in other.encode_utf8(&mut utf8).bytes() {
+                    uri.push_str(&format!("%{byte:02X}"));
+                }
+            }
+        }
+    }
+    Some(uri)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn relative_uris_climb_and_escape() {
+        let uri = relative_uri(Path::new("/a/b/tex ture.png"), Some(Path::new("/a/c/d"))).unwrap();
+        assert_eq!(uri, "../../b/tex%20ture.png");
+        assert_eq!(relative_uri(Path::new("/a/x.png"), Some(Path::new("/a"))).unwrap(), "x.png");
+        assert_eq!(relative_uri(Path::new("/a/x.png"), None), None);
+    }
+
+    #[test]
+    fn image_types_are_known_by_their_bytes() {
+        assert_eq!(sniff_image(b"\x89PNG\r\n\x1a\n...."), Some("image/png"));
+        assert_eq!(sniff_image(&[0xFF, 0xD8, 0xFF, 0xE0]), Some("image/jpeg"));
+        assert_eq!(sniff_image(b"GIF89a"), None);
+    }
+}

@@ -1,0 +1,157 @@
+//! Wavefront MTL material files, translated into glTF terms ([`MaterialLibrary`]) so that an OBJ
+//! written as glTF draws with its diffuse colour, opacity and diffuse texture.
+//!
+//! Only what a textured LOD needs is read: `newmtl`, `Kd`, `d` and `map_Kd` (its options skipped,
+//! the file name may hold spaces). `Tr` is not read: exporters disagree on whether it means
+//! transparency or opacity. A material named by `usemtl` but found in no MTL file keeps its name.
+
+use std::path::Path;
+
+use serde_json::json;
+
+use crate::mesh::{Image, ImageSource, MaterialLibrary};
+
+/// Largest MTL file read (they are small text files; a larger one is skipped).
+const MAX_MTL_BYTES: u64 = 16 << 20;
+
+/// One `newmtl` entry.
+#[derive(Default, Clone)]
+struct Entry {
+    name: String,
+    diffuse: Option<[f64; 3]>,
+    opacity: Option<f64>,
+    texture: Option<String>,
+}
+
+/// The materials `names` (in `usemtl` order) as found in the `mtllib` files `libraries`, looked
+/// for in `folder`.
+pub(crate) fn library(names: &[String], libraries: &[String], folder: Option<&Path>) -> MaterialLibrary {
+    let mut entries: Vec<Entry> = Vec::new();
+    if let Some(folder) = folder {
+        for line in libraries {
+            // `mtllib a.mtl b.mtl`, or one file name with spaces.
+            let whole = folder.join(line);
+            let files: Vec<std::path::PathBuf> = if whole.is_file() {
+                vec![whole]
+            } else {
+                line.split_ascii_whitespace().map(|f| folder.join(f)).collect()
+            };
+            for file in files {
+                let small = std::fs::metadata(&file).is_ok_and(|m| m.is_file() && m.len() <= MAX_MTL_BYTES);
+                if let Some(text) = small.then(|| std::fs::read(&file).ok()).flatten() {
+                    entries.extend(parse(&String::from_utf8_lossy(&text)));
+                }
+            }
+        }
+    }
+    let mut library = MaterialLibrary::default();
+    let mut texture_files: Vec<String> = Vec::new();
+    for name in names {
+        let entry = entries
+            .iter()
+            .find(|e| e.name == *name)
+            .cloned()
+            .unwrap_or(Entry { name: name.clone(), ..Default::default() });
+        let opacity = entry.opacity.unwrap_or(1.0).clamp(0.0, 1.0);
+        // A texture is modulated by white: exporters write Kd beside map_Kd inconsistently.
+        let colour = if entry.texture.is_some() { [1.0; 3] } else { entry.diffuse.unwrap_or([1.0; 3]) };
+        let mut pbr = json!({
+            "baseColorFactor": [colour[0], colour[1], colour[2], opacity],
+            "metallicFactor": 0.0,
+            "roughnessFactor": 1.0,
+        });
+        if let Some(file) = &entry.texture {
+            let index = texture_files.iter().position(|f| f == file).unwrap_or_else(|| {
+                texture_files.push(file.clone());
+                texture_files.len() - 1
+            });
+            pbr["baseColorTexture"] = json!({ "index": index });
+        }
+        let mut material = json!({ "name": entry.name, "pbrMetallicRoughness": pbr });
+        if opacity < 1.0 {
+            material["alphaMode"] = json!("BLEND");
+        }
+        library.materials.push(material);
+    }
+    for (index, file) in texture_files.iter().enumerate() {
+        library.textures.push(json!({ "source": index }));
+        let source = match folder {
+            Some(folder) => ImageSource::File(folder.join(file)),
+            None => ImageSource::Uri(file.replace(' ', "%20")),
+        };
+        let mime_type = match Path::new(file).extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase) {
+            Some(e) if e == "png" => Some("image/png".to_string()),
+            Some(e) if e == "jpg" || e == "jpeg" => Some("image/jpeg".to_string()),
+            _ => None,
+        };
+        library.images.push(Image { json: json!({ "name": file }), source, mime_type });
+    }
+    library
+}
+
+/// The `newmtl` entries of an MTL file.
+fn parse(text: &str) -> Vec<Entry> {
+    let mut entries: Vec<Entry> = Vec::new();
+    for line in text.lines() {
+        let line = line.trim();
+        let mut tokens = line.split_ascii_whitespace();
+        let Some(keyword) = tokens.next() else { continue };
+        let rest = line[keyword.len()..].trim();
+        if keyword == "newmtl" {
+            entries.push(Entry { name: rest.to_string(), ..Default::default() });
+            continue;
+        }
+        let Some(entry) = entries.last_mut() else { continue };
+        let numbers: Vec<f64> = tokens.map_while(|t| t.parse::<f64>().ok()).filter(|x| x.is_finite()).collect();
+        match keyword {
+            "Kd" if numbers.len() >= 3 => entry.diffuse = Some([numbers[0], numbers[1], numbers[2]]),
+            "d" if !numbers.is_empty() => entry.opacity = Some(numbers[0]),
+            "map_Kd" => entry.texture = texture_file(rest),
+            _ => {}
+        }
+    }
+    entries
+}
+
+/// The file name of a `map_*` statement: its options (`-o 0 0 0`, `-clamp on`, ...) skipped.
+fn texture_file(rest: &str) -> Option<String> {
+    let tokens: Vec<&str> = rest.split_ascii_whitespace().collect();
+    let mut i = 0;
+    while i < tokens.len() && tokens[i].starts_with('-') {
+        i += 1;
+        // The option's arguments: numbers, or on/off, or one word for -imfchan / -type.
+        let words = matches!(tokens[i - 1], "-imfchan" | "-type" | "-bm");
+        while i < tokens.len()
+            && (tokens[i].parse::<f64>().is_ok()
+                || matches!(tokens[i], "on" | "off")
+                || (words && !tokens[i].contains('.')))
+        {
+            i += 1;
+        }
+    }
+    let name = tokens[i..].join(" ");
+    (!name.is_empty()).then_some(name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn entries_keep_colour_opacity_and_texture() {
+        let entries = parse("newmtl a b\nKd 0.5 0.25 1\nd 0.5\nnewmtl tex\nmap_Kd -o 0.1 0.2 -clamp on my tex.png\n");
+        assert_eq!(entries.len(), 2);
+        assert_eq!(entries[0].name, "a b");
+        assert_eq!(entries[0].diffuse, Some([0.5, 0.25, 1.0]));
+        assert_eq!(entries[0].opacity, Some(0.5));
+        assert_eq!(entries[1].texture.as_deref(), Some("my tex.png"));
+    }
+
+    #[test]
+    fn missing_materials_keep_their_names() {
+        let library = library(&["x".into(), "y".into()], &["absent.mtl".into()], Some(Path::new("/nonexistent")));
+        assert_eq!(library.materials.len(), 2);
+        assert_eq!(library.material_name(1), "y");
+        assert!(library.textures.is_empty());
+    }
+}
