@@ -71,6 +71,7 @@ fn simplify_request(mesh: &Mesh, ratio: f64) -> proto::SimplifyRequest {
     proto::SimplifyRequest {
         input: input(mesh),
         options: Some(proto::SimplifyOptions { target_ratio: Some(ratio), ..Default::default() }),
+        ..Default::default()
     }
 }
 
@@ -163,6 +164,7 @@ async fn every_rpc_over_loopback() {
                 })),
             }),
             options: Some(proto::SimplifyOptions { target_faces: Some(500), ..Default::default() }),
+            ..Default::default()
         })
         .await
         .unwrap()
@@ -221,6 +223,7 @@ async fn every_rpc_over_loopback() {
         .simplify(proto::SimplifyRequest {
             input: input(&mesh),
             options: Some(proto::SimplifyOptions { target_ratio: Some(0.9), w_auto: true, ..Default::default() }),
+            ..Default::default()
         })
         .await
         .unwrap()
@@ -241,6 +244,7 @@ async fn every_rpc_over_loopback() {
                 compute_hausdorff: true,
                 ..Default::default()
             }),
+            ..Default::default()
         })
         .await
         .unwrap()
@@ -255,6 +259,7 @@ async fn every_rpc_over_loopback() {
         .simplify(proto::SimplifyRequest {
             input: input(&mesh),
             options: Some(proto::SimplifyOptions { w_search: true, w_auto: true, ..Default::default() }),
+            ..Default::default()
         })
         .await
         .unwrap_err();
@@ -335,6 +340,7 @@ async fn encoded_glb_is_read_and_its_attributes_kept() {
             return_progressive: true,
             ..Default::default()
         }),
+        ..Default::default()
     };
     let response = client.simplify(request).await.expect("a GLB is read").into_inner();
     let stats = response.stats.unwrap();
@@ -363,11 +369,47 @@ async fn encoded_glb_is_read_and_its_attributes_kept() {
                 })),
             }),
             options: None,
+            ..Default::default()
         })
         .await
         .unwrap_err();
     assert_eq!(status.code(), tonic::Code::InvalidArgument);
     assert!(status.message().contains("cannot be read here"), "{}", status.message());
+
+    // The result asked for as a file: a GLB back (and no `mesh`), read as the same result; a
+    // read-only format is refused by field before any work.
+    let glb = include_bytes!("../engine/tests/fuzz-corpus/quad-nodes.glb").to_vec();
+    let ask = |format: proto::MeshFormat| proto::SimplifyRequest {
+        input: Some(proto::MeshInput {
+            source: Some(proto::mesh_input::Source::File(proto::EncodedMesh {
+                data: glb.clone(),
+                format: proto::MeshFormat::Gltf as i32,
+            })),
+        }),
+        options: Some(proto::SimplifyOptions { target_ratio: Some(0.5), ..Default::default() }),
+        output_format: format as i32,
+    };
+    let response = client.simplify(ask(proto::MeshFormat::Gltf)).await.unwrap().into_inner();
+    assert!(response.mesh.is_none());
+    let encoded = response.encoded.expect("the result as a file");
+    assert_eq!(encoded.format, proto::MeshFormat::Gltf as i32);
+    assert!(encoded.data.starts_with(b"glTF"));
+    let back = meshlod_engine::io::read_mesh_bytes(
+        &encoded.data,
+        None,
+        std::path::Path::new("back.glb"),
+        &meshlod_engine::io::ReadLimits::default(),
+    )
+    .unwrap();
+    assert_eq!(back.face_count() as u32, response.stats.unwrap().faces_out);
+    assert_eq!(back.corners.names(), ["uv", "material"]);
+    let status = client.simplify(ask(proto::MeshFormat::Stl)).await.unwrap_err();
+    assert_eq!(status.code(), tonic::Code::InvalidArgument);
+    assert!(
+        status.message().contains("output_format") && status.message().contains("read only"),
+        "{}",
+        status.message()
+    );
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -383,6 +425,7 @@ async fn invalid_requests_name_the_field() {
             source: Some(proto::mesh_input::Source::Mesh(proto::Mesh { positions, indices, ..Default::default() })),
         }),
         options: None,
+        ..Default::default()
     };
     let attributed = |uvs: Vec<f32>, normals: Vec<f32>, colors: Vec<f32>| proto::SimplifyRequest {
         input: Some(proto::MeshInput {
@@ -395,6 +438,7 @@ async fn invalid_requests_name_the_field() {
             })),
         }),
         options: None,
+        ..Default::default()
     };
     let cases: Vec<(proto::SimplifyRequest, &str)> = vec![
         (tri(vec![0., 0., 0., 1., 0., 0., 0., f32::NAN, 0.], vec![0, 1, 2]), "input.mesh.positions[7]"),
@@ -404,7 +448,7 @@ async fn invalid_requests_name_the_field() {
         (attributed(vec![0.5; 5], vec![], vec![]), "input.mesh.uvs"),
         (attributed(vec![], vec![0.0, 0.0, 1.0, f32::NAN, 0.0, 1.0, 0.0, 0.0, 1.0], vec![]), "input.mesh.normals[3]"),
         (attributed(vec![], vec![], vec![1.0; 8]), "input.mesh.colors"),
-        (proto::SimplifyRequest { input: None, options: None }, "input"),
+        (proto::SimplifyRequest { input: None, options: None, ..Default::default() }, "input"),
         (
             proto::SimplifyRequest {
                 options: Some(proto::SimplifyOptions { target_ratio: Some(1.5), ..Default::default() }),
@@ -481,6 +525,7 @@ async fn invalid_requests_name_the_field() {
             })),
         }),
         options: None,
+        ..Default::default()
     };
     let status = client.simplify(bad_file).await.unwrap_err();
     assert_eq!(status.code(), Code::InvalidArgument);

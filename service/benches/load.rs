@@ -19,6 +19,7 @@ fn request(mesh: &Mesh, ratio: f64) -> proto::SimplifyRequest {
     proto::SimplifyRequest {
         input: Some(proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(mesh_to_proto(mesh))) }),
         options: Some(proto::SimplifyOptions { target_ratio: Some(ratio), ..Default::default() }),
+        ..Default::default()
     }
 }
 

@@ -362,6 +362,7 @@ impl RefineArgs {
                 Some(ModeArg::Both) => proto::RefineMode::Both,
             } as i32,
             rounds: Some(self.rounds),
+            ..Default::default()
         };
         RefineJob { input: self.input.clone(), output: self.output.clone(), request, reference: self.reference.clone() }
     }

@@ -133,6 +133,7 @@ impl Executor for Remote {
                 let request = proto::SimplifyRequest {
                     input: Some(proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(input)) }),
                     options: Some(options),
+                    ..Default::default()
                 };
                 client.simplify(self.request(request)?).await.map_err(status_error)
             }

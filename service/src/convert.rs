@@ -179,6 +179,32 @@ pub fn mesh_from_proto(m: &proto::Mesh, field: &str, limits: &MeshLimits) -> Res
     Ok(mesh)
 }
 
+/// The file format a request asks its result in (`None`: as a `Mesh`); read-only formats and
+/// unknown values are INVALID_ARGUMENT naming `field`.
+pub fn output_format(value: i32, field: &str) -> Result<Option<proto::MeshFormat>, Status> {
+    match proto::MeshFormat::try_from(value) {
+        Ok(proto::MeshFormat::Unspecified) => Ok(None),
+        Ok(f @ (proto::MeshFormat::Obj | proto::MeshFormat::Ply | proto::MeshFormat::Gltf)) => Ok(Some(f)),
+        Ok(f) => Err(invalid(field, format!("{} is read only: ask for OBJ, PLY or GLTF", f.as_str_name()))),
+        Err(_) => Err(invalid(field, format!("unknown format {value}"))),
+    }
+}
+
+/// The mesh as a file in `format` (glTF as GLB), or `None` when no format was asked for.
+pub fn encode_mesh(mesh: &Mesh, format: Option<proto::MeshFormat>) -> Result<Option<proto::EncodedMesh>, Status> {
+    let Some(format) = format else { return Ok(None) };
+    let engine_format = match format {
+        proto::MeshFormat::Obj => MeshFormat::Obj,
+        proto::MeshFormat::Ply => MeshFormat::Ply,
+        _ => MeshFormat::Gltf,
+    };
+    let mut data = Vec::new();
+    meshlod_engine::io::write_mesh_to(&mut data, mesh, engine_format).map_err(|e| {
+        invalid("output_format", format!("the result cannot be written as {}: {e}", format.as_str_name()))
+    })?;
+    Ok(Some(proto::EncodedMesh { data, format: format as i32 }))
+}
+
 /// Converts an engine mesh to the contract: attributes per vertex, a vertex whose corners differ
 /// (a seam) once per distinct value.
 pub fn mesh_to_proto(mesh: &Mesh) -> proto::Mesh {

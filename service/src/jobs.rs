@@ -31,6 +31,8 @@ pub struct Simplification {
     pub stats: proto::SimplifyStats,
     /// The measured distance, when asked for.
     pub hausdorff: Option<proto::HausdorffReport>,
+    /// The result as a file, when the request asked for one (`output_format`).
+    pub encoded: Option<proto::EncodedMesh>,
 }
 
 /// Options that are accepted but change nothing, said back to the caller.
@@ -142,7 +144,7 @@ pub fn simplify(
         },
         boundary: format!("{:?}", options.boundary).to_lowercase(),
     };
-    Ok(Simplification { result, stats, hausdorff })
+    Ok(Simplification { result, stats, hausdorff, encoded: None })
 }
 
 /// The refiner's options from the contract's request (its `input` is not read): the mode

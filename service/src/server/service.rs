@@ -105,10 +105,13 @@ impl MeshLodService {
         let limits = self.config.limits;
         let predictor = self.config.predictor.clone();
         move |cancel| {
+            let format = convert::output_format(request.output_format, "output_format")?;
             let mesh = mesh_from_input(request.input.as_ref(), "input", &limits, Some(cancel.clone()))?;
             let mut options = request.options.unwrap_or_default();
             options.return_progressive |= progressive;
-            jobs::simplify(&mesh, &options, predictor.as_deref(), Some(cancel))
+            let mut run = jobs::simplify(&mesh, &options, predictor.as_deref(), Some(cancel))?;
+            run.encoded = convert::encode_mesh(&run.result.mesh, format)?;
+            Ok(run)
         }
     }
 
@@ -126,10 +129,11 @@ impl MeshLodService {
 
 fn simplify_response(run: jobs::Simplification) -> proto::SimplifyResponse {
     proto::SimplifyResponse {
-        mesh: Some(mesh_to_proto(&run.result.mesh)),
+        mesh: run.encoded.is_none().then(|| mesh_to_proto(&run.result.mesh)),
         progressive: run.result.progressive.as_ref().map(progressive_to_proto),
         stats: Some(run.stats),
         hausdorff: run.hausdorff,
+        encoded: run.encoded,
     }
 }
 
@@ -220,6 +224,7 @@ impl MeshLod for MeshLodService {
         let request = proto::SimplifyRequest {
             input: Some(proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(mesh)) }),
             options,
+            ..Default::default()
         };
         let result = admitted.run(self.simplification(request, false)).await;
         outcome.finish(&result);
@@ -233,10 +238,16 @@ impl MeshLod for MeshLodService {
         let limits = self.config.limits;
         let response = self
             .run("Refine", deadline, move |cancel| {
+                let format = convert::output_format(request.output_format, "output_format")?;
                 let mesh = mesh_from_input(request.input.as_ref(), "input", &limits, Some(cancel.clone()))?;
                 let (result, stats) =
                     jobs::refine(&mesh, &request, predictor.as_deref(), Some(cancel), limits.max_faces)?;
-                Ok(proto::RefineResponse { mesh: Some(mesh_to_proto(&result.mesh)), stats: Some(stats) })
+                let encoded = convert::encode_mesh(&result.mesh, format)?;
+                Ok(proto::RefineResponse {
+                    mesh: encoded.is_none().then(|| mesh_to_proto(&result.mesh)),
+                    stats: Some(stats),
+                    encoded,
+                })
             })
             .await?;
         Ok(Response::new(response))
