@@ -144,6 +144,12 @@ impl TriangleBvh {
         }
     }
 
+    /// The original face index of the triangle in `slot`.
+    #[inline]
+    pub fn slot_face(&self, slot: u32) -> u32 {
+        self.faces[slot as usize]
+    }
+
     /// The corners of the triangle in `slot`, widened to f64.
     #[inline]
     pub fn slot_corners(&self, slot: u32) -> [DVec3; 3] {

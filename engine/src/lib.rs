@@ -5,6 +5,7 @@
 //! side of its bounding box spans [−1, 1]) and in *percent of the bounding-box diagonal*; see
 //! [`mesh::DistanceUnits`].
 
+pub mod appearance;
 pub mod bvh;
 pub mod datasets;
 pub mod error;

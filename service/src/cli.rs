@@ -154,6 +154,8 @@ pub enum MetricArg {
 /// Placement of the merged vertex.
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum PlacementArg {
+    /// optimal, or endpoint for a mesh with texture coordinates (their values stay where they were)
+    Auto,
     Paper,
     Optimal,
     Endpoint,
@@ -247,7 +249,7 @@ pub struct SimplifyArgs {
     #[arg(long, default_value = "0")]
     pub w: WArg,
     /// Placement of the merged vertex.
-    #[arg(long, value_enum, default_value_t = PlacementArg::Optimal)]
+    #[arg(long, value_enum, default_value_t = PlacementArg::Auto)]
     pub placement: PlacementArg,
     /// Normal of the merged vertex: the paper's linear estimate or a recompute over its fan.
     #[arg(long, value_enum, default_value_t = NormalsArg::Linear)]
@@ -294,6 +296,7 @@ impl SimplifyArgs {
             w_auto: self.w == WArg::Auto,
             w_search: self.w == WArg::Search,
             placement: match self.placement {
+                PlacementArg::Auto => proto::Placement::Unspecified,
                 PlacementArg::Optimal => proto::Placement::Optimal,
                 PlacementArg::Paper => proto::Placement::Paper,
                 PlacementArg::Endpoint => proto::Placement::Endpoint,

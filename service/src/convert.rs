@@ -292,7 +292,8 @@ impl TryFrom<&proto::SimplifyOptions> for SimplifyOptions {
             Err(_) => return Err(invalid("options.metric", format!("unknown value {}", o.metric))),
         };
         let placement = match proto::Placement::try_from(o.placement) {
-            Ok(proto::Placement::Unspecified | proto::Placement::Optimal) => Placement::Optimal,
+            Ok(proto::Placement::Unspecified) => Placement::Auto,
+            Ok(proto::Placement::Optimal) => Placement::Optimal,
             Ok(proto::Placement::Paper) => Placement::Paper,
             Ok(proto::Placement::Endpoint) => Placement::Endpoint,
             Err(_) => return Err(invalid("options.placement", format!("unknown value {}", o.placement))),

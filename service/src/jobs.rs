@@ -137,7 +137,7 @@ pub fn simplify(
         frozen_vertices: s.frozen_vertices as u32,
         target_faces: s.target_faces as u32,
         rejected: s.rejected as u64,
-        placement: format!("{:?}", options.placement).to_lowercase(),
+        placement: format!("{:?}", result.stats.placement).to_lowercase(),
         normals: match options.normals {
             NormalUpdate::Linear => "linear".into(),
             NormalUpdate::Recompute => "recompute".into(),

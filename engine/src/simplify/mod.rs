@@ -128,6 +128,14 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     }
     // Every vertex of the prepared mesh is on a face: its bounds are its surface's.
     let units = DistanceUnits::new(&prepared.bounds().expect("has faces"));
+    // `Auto` placement, resolved for this mesh.
+    let resolved;
+    let options = if options.placement == Placement::Auto {
+        resolved = SimplifyOptions { placement: options.placement.resolve(&prepared), ..options.clone() };
+        &resolved
+    } else {
+        options
+    };
     // 2–3. Classification and working state. Melax's cost reads face normals through the triangle
     // array; the quadric costs never do, so the array is rebuilt once at the end instead.
     let (mut state, edges) = State::with_tracking(&prepared, options, options.metric == Metric::Melax);
@@ -157,6 +165,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
         vertices_in: prepared.vertex_count(),
         vertices_out: simplified.vertex_count(),
         target_faces: target,
+        placement: options.placement,
         collapses: run.log.len(),
         stop_reason: run.stop_reason,
         max_collapse_error: run.max_collapse_error,

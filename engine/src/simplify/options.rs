@@ -57,6 +57,21 @@ pub enum Placement {
     /// The better endpoint (half-edge collapse): vertices never move, so each vertex split
     /// carries one position and the `.pm` file is smallest.
     Endpoint,
+    /// `Optimal` for a mesh without texture coordinates, `Endpoint` for one with them: a vertex
+    /// keeps the values it had at the position it had, so the texture does not slide (the
+    /// trade in texture-space and position error is measured in docs/attributes-report.md).
+    Auto,
+}
+
+impl Placement {
+    /// The placement `Auto` stands for on `mesh`; others are themselves.
+    pub fn resolve(self, mesh: &crate::mesh::Mesh) -> Placement {
+        match self {
+            Placement::Auto if mesh.corners.uvs.is_some() => Placement::Endpoint,
+            Placement::Auto => Placement::Optimal,
+            other => other,
+        }
+    }
 }
 
 /// How the merged vertex's normal is found.
@@ -122,7 +137,7 @@ impl Default for SimplifyOptions {
             // w = 0 gave the lowest Hausdorff on 16 of 22 (mesh, reduction) cases of the shared
             // meshes (docs/simplify-report.md); a per-mesh w comes from the predictor.
             metric: Metric::Qfvp { w: 0.0 },
-            placement: Placement::Optimal,
+            placement: Placement::Auto,
             normals: NormalUpdate::Linear,
             boundary: BoundaryMode::Preserve,
             max_normal_change_degrees: DEFAULT_MAX_NORMAL_CHANGE_DEGREES,
@@ -170,6 +185,8 @@ pub struct SimplifyStats {
     pub vertices_out: usize,
     /// The face target that applied.
     pub target_faces: usize,
+    /// The placement used (`Auto` resolved).
+    pub placement: Placement,
     /// Collapses performed.
     pub collapses: usize,
     /// Why it stopped.

@@ -1,0 +1,188 @@
+//! How far a level of detail's texture coordinates and normals are from the input's: for points
+//! spread over the LOD by area, the distance in texture space between the LOD's interpolated
+//! texture coordinates and the input's at the nearest input point, and the angle between their
+//! interpolated normals.
+//!
+//! Where the nearest input point lies on a seam (or a hard edge), the input has two values there;
+//! every input triangle as near as the nearest (to a relative 1e-9 of the bounding-box diagonal) is
+//! a candidate and the closest value counts, so a sample is compared with its own chart, not with
+//! the chart across the seam. Sampling is deterministic for a seed.
+
+use glam::{DVec2, DVec3};
+
+use crate::bvh::{TriangleBvh, closest_point_on_triangle};
+use crate::mesh::Mesh;
+use crate::rng::SplitMix64;
+
+/// The distribution of one kind of error over the samples.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Spread {
+    /// Area-weighted mean.
+    pub mean: f64,
+    /// 95th percentile.
+    pub p95: f64,
+    /// Largest at a sample (a lower bound of the maximum).
+    pub max_sampled: f64,
+}
+
+/// Texture-space and normal error of a LOD against its input.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct AppearanceError {
+    /// Points sampled on the LOD.
+    pub samples: usize,
+    /// Texture-space distance in texels of a square texture of the given size (both meshes need
+    /// texture coordinates).
+    pub uv_texels: Option<Spread>,
+    /// Angle between the normals, degrees (both meshes need normals).
+    pub normal_degrees: Option<Spread>,
+}
+
+fn spread(mut values: Vec<f64>) -> Option<Spread> {
+    if values.is_empty() {
+        return None;
+    }
+    let mean = values.iter().sum::<f64>() / values.len() as f64;
+    values.sort_by(f64::total_cmp);
+    let p95 = values[((values.len() - 1) as f64 * 0.95).round() as usize];
+    Some(Spread { mean, p95, max_sampled: values[values.len() - 1] })
+}
+
+/// Barycentric coordinates of `p` (on the triangle's plane) in triangle `t`.
+fn barycentric(p: DVec3, [a, b, c]: [DVec3; 3]) -> [f64; 3] {
+    let (v0, v1, v2) = (b - a, c - a, p - a);
+    let (d00, d01, d11, d20, d21) = (v0.dot(v0), v0.dot(v1), v1.dot(v1), v2.dot(v0), v2.dot(v1));
+    let denominator = d00 * d11 - d01 * d01;
+    if denominator.abs() < f64::MIN_POSITIVE {
+        return [1.0, 0.0, 0.0];
+    }
+    let v = (d11 * d20 - d01 * d21) / denominator;
+    let w = (d00 * d21 - d01 * d20) / denominator;
+    [1.0 - v - w, v, w]
+}
+
+fn uv_at(mesh: &Mesh, f: usize, b: [f64; 3]) -> Option<DVec2> {
+    let uvs = mesh.corners.uvs.as_ref()?;
+    Some((0..3).map(|k| DVec2::new(uvs[3 * f + k][0] as f64, uvs[3 * f + k][1] as f64) * b[k]).sum())
+}
+
+fn normal_at(mesh: &Mesh, f: usize, b: [f64; 3]) -> Option<DVec3> {
+    let normals = mesh.corners.normals.as_ref()?;
+    Some((0..3).map(|k| DVec3::from(normals[3 * f + k].map(f64::from)) * b[k]).sum::<DVec3>().normalize_or_zero())
+}
+
+/// The error of `lod`'s texture coordinates and normals against `input`'s, at `samples` points
+/// spread over `lod` by area (seeded by `seed`); texture-space distances in texels of a
+/// `texture_size`² texture. `None` when either mesh has no faces or no area.
+pub fn appearance_error(
+    input: &Mesh,
+    lod: &Mesh,
+    samples: usize,
+    texture_size: f64,
+    seed: u64,
+) -> Option<AppearanceError> {
+    let bvh = TriangleBvh::new(input)?;
+    let diagonal = input.bounds()?.diagonal();
+    let areas: Vec<f64> = (0..lod.face_count()).map(|f| lod.face_area(f)).collect();
+    let total: f64 = areas.iter().sum();
+    if total <= 0.0 || samples == 0 {
+        return None;
+    }
+    let mut cumulative = Vec::with_capacity(areas.len());
+    let mut running = 0.0;
+    for a in &areas {
+        running += a;
+        cumulative.push(running);
+    }
+    let with_uv = input.corners.uvs.is_some() && lod.corners.uvs.is_some();
+    let with_normal = input.corners.normals.is_some() && lod.corners.normals.is_some();
+    let mut rng = SplitMix64::new(seed);
+    let (mut uv_errors, mut normal_errors) = (Vec::new(), Vec::new());
+    let mut candidates = Vec::new();
+    let mut hint = None;
+    for _ in 0..samples {
+        let pick = rng.next_f64() * total;
+        let f = cumulative.partition_point(|&c| c < pick).min(areas.len() - 1);
+        let (r1, r2) = (rng.next_f64().sqrt(), rng.next_f64());
+        let b = [1.0 - r1, r1 * (1.0 - r2), r1 * r2];
+        let corners = lod.triangle_points(f);
+        let p: DVec3 = (0..3).map(|k| corners[k] * b[k]).sum();
+        let nearest = bvh.closest_point(p, hint);
+        hint = Some(nearest.slot);
+        let radius = nearest.distance() + 1e-9 * diagonal;
+        candidates.clear();
+        let reach = DVec3::splat(radius);
+        bvh.slots_in_box(p - reach, p + reach, (DVec3::X, p.x, radius), 64, &mut candidates);
+        if candidates.is_empty() {
+            candidates.push(nearest.slot);
+        }
+        let (mut best_uv, mut best_normal) = (f64::INFINITY, f64::INFINITY);
+        let (uv_out, normal_out) = (uv_at(lod, f, b), normal_at(lod, f, b));
+        for &slot in &candidates {
+            let t = bvh.slot_corners(slot);
+            let q = closest_point_on_triangle(p, t[0], t[1], t[2]);
+            if (q - p).length() > radius && slot != nearest.slot {
+                continue;
+            }
+            let g = bvh.slot_face(slot) as usize;
+            let bq = barycentric(q, t);
+            if let (Some(out), Some(inp)) = (uv_out, uv_at(input, g, bq)) {
+                best_uv = best_uv.min((out - inp).length() * texture_size);
+            }
+            if let (Some(out), Some(inp)) = (normal_out, normal_at(input, g, bq)) {
+                best_normal = best_normal.min(out.dot(inp).clamp(-1.0, 1.0).acos().to_degrees());
+            }
+        }
+        if with_uv && best_uv.is_finite() {
+            uv_errors.push(best_uv);
+        }
+        if with_normal && best_normal.is_finite() {
+            normal_errors.push(best_normal);
+        }
+    }
+    Some(AppearanceError { samples, uv_texels: spread(uv_errors), normal_degrees: spread(normal_errors) })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square(uv_scale: f32) -> Mesh {
+        let mut mesh = Mesh::new(
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+            vec![[0, 1, 2], [0, 2, 3]],
+        )
+        .unwrap();
+        let uv = |v: u32| {
+            let p = mesh.positions[v as usize];
+            [p[0] * uv_scale, p[1] * uv_scale]
+        };
+        mesh.corners.uvs = Some(mesh.triangles.iter().flatten().map(|&v| uv(v)).collect());
+        mesh.corners.normals = Some(vec![[0.0, 0.0, 1.0]; 6]);
+        mesh
+    }
+
+    #[test]
+    fn the_same_surface_has_no_error_and_a_stretched_atlas_has_its_stretch() {
+        let a = square(1.0);
+        let same = appearance_error(&a, &a, 500, 1024.0, 1).unwrap();
+        assert!(same.uv_texels.unwrap().max_sampled < 1e-6, "{same:?}");
+        assert!(same.normal_degrees.unwrap().max_sampled < 1e-6, "{same:?}");
+        // UVs scaled by 1.5: a point at distance r from the origin is 0.5 r away in texture space.
+        let b = square(1.5);
+        let error = appearance_error(&a, &b, 4000, 1024.0, 1).unwrap().uv_texels.unwrap();
+        let expected_mean = 0.5 * 1024.0 * 0.7652; // mean distance from a corner of the unit square
+        assert!((error.mean - expected_mean).abs() < 0.03 * expected_mean, "{error:?} vs {expected_mean}");
+        assert!(error.max_sampled <= 0.5 * 1024.0 * 2f64.sqrt() + 1e-6);
+    }
+
+    #[test]
+    fn a_seam_compares_each_side_with_its_own_chart() {
+        // Two triangles meeting on the diagonal, each with its own chart far apart: samples on
+        // the diagonal have two input values, and the nearer one counts.
+        let mut a = square(1.0);
+        let uvs = a.corners.uvs.as_mut().unwrap();
+        uvs[3..6].iter_mut().for_each(|uv| uv[0] += 5.0);
+        let error = appearance_error(&a, &a, 2000, 1024.0, 7).unwrap().uv_texels.unwrap();
+        assert!(error.max_sampled < 1e-6, "{error:?}");
+    }
+}
