@@ -56,6 +56,10 @@ pub(crate) struct State<'o> {
     /// has. Empty when the input has none (the collapse then pays nothing for them).
     pub(super) attributes: CornerAttributes,
     pub(super) corner_source: Vec<u32>,
+    /// Per vertex, with attributes: whether it has two sets of values (on a seam). Rule 7 lets
+    /// such a vertex go only into another on the seam, so with one end on a seam, the ranking
+    /// keeps that end in place ([`State::choose`]) rather than picking a collapse rule 7 refuses.
+    pub(super) on_seam: Vec<bool>,
 }
 
 /// What ranking an edge reads of each endpoint, in one 128-byte block (two adjacent cache lines)
@@ -148,6 +152,7 @@ impl<'o> State<'o> {
             guard: None,
             attributes: CornerAttributes::default(),
             corner_source: Vec::new(),
+            on_seam: Vec::new(),
         };
         if options.guard > 0.0 {
             state.guard = DistanceGuard::new(mesh, &state.fans);
@@ -249,6 +254,8 @@ impl<'o> State<'o> {
                 self.vertices[v as usize].kind = VertexKind::Frozen;
             }
         }
+        // (A survivor keeps its flag: a seam vertex goes only into one on the same seam.)
+        self.on_seam = seen.iter().map(|sets| sets[1] != NONE).collect();
     }
 
     /// The input corner whose values vertex `v` has in face `f`.

@@ -50,6 +50,17 @@ impl State<'_> {
             (_, VertexKind::Boundary) => (false, true, false),
             _ => (true, true, true),
         };
+        // With attributes, an edge with one end on a seam keeps that end where it is (rule 7).
+        let (may_keep_a, may_keep_b, may_move) = if self.on_seam.is_empty() {
+            (may_keep_a, may_keep_b, may_move)
+        } else {
+            match (self.on_seam[a as usize], self.on_seam[b as usize]) {
+                (true, false) if may_keep_a => (true, false, false),
+                (false, true) if may_keep_b => (false, true, false),
+                (true, false) | (false, true) => return None,
+                _ => (may_keep_a, may_keep_b, may_move),
+            }
+        };
         let (pa, pb) = (to_f64(va.position), to_f64(vb.position));
         let mut best: Option<Choice> = None;
         // Keeps the choice with the lower (cost, error); the first one considered wins a tie.
