@@ -413,4 +413,19 @@ fn textured_gltf_assets_convert_to_obj_with_their_attributes() {
         }
     }
     fails_with(&["convert", s(&textured.join("draco__Duck/Duck.gltf")), s(&dir.join("duck.stl"))], "read only");
+    // What a result cannot carry is said: CesiumMan's skin, Lantern's tangents; Duck has nothing left out.
+    let warnings = |asset: &str| {
+        let out = dir.join("lod.glb");
+        let report = ok_json(&["simplify", s(&textured.join(asset)), "-o", s(&out), "--ratio", "0.9", "--json"]);
+        assert_eq!(report["placement"], "endpoint", "{asset}: texture coordinates keep vertices in place");
+        report["warnings"].as_array().unwrap().iter().map(|w| w.as_str().unwrap().to_string()).collect::<Vec<_>>()
+    };
+    let cesium = warnings("draco__CesiumMan/CesiumMan.gltf");
+    assert!(
+        cesium.iter().any(|w| w.contains("skins") && w.contains("WEIGHTS_0") && w.contains("animations")),
+        "{cesium:?}"
+    );
+    let lantern = warnings("draco__Lantern/Lantern.gltf");
+    assert!(lantern.iter().any(|w| w.contains("TANGENT")), "{lantern:?}");
+    assert_eq!(warnings("draco__Duck/Duck.gltf"), Vec::<String>::new());
 }

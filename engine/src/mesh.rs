@@ -82,6 +82,10 @@ pub struct MaterialLibrary {
     pub extensions_used: Vec<String>,
     /// See `extensions_used`.
     pub extensions_required: Vec<String>,
+    /// What the input had that a mesh does not carry (skins, morph targets, animations, tangents,
+    /// second texture coordinates, point and line primitives), named for the warnings of every
+    /// operation that writes a result.
+    pub not_carried: Vec<String>,
 }
 
 /// One image of a [`MaterialLibrary`].
@@ -104,6 +108,15 @@ pub enum ImageSource {
     File(std::path::PathBuf),
     /// A URI that could not be resolved (bytes that came without their folder): carried as is.
     Uri(String),
+}
+
+impl CornerAttributes {
+    /// What the input had that is not carried ([`MaterialLibrary::not_carried`]): a warning, or
+    /// `None` when nothing is left out.
+    pub fn not_carried_warning(&self) -> Option<String> {
+        let list = &self.library.as_ref()?.not_carried;
+        (!list.is_empty()).then(|| format!("the input's {} are not carried: the result has none", list.join(", ")))
+    }
 }
 
 impl MaterialLibrary {

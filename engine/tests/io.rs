@@ -694,3 +694,38 @@ fn corner_key(mesh: &Mesh, k: usize) -> Vec<u32> {
     key.extend(c.colors.iter().flat_map(|x| x[k].map(f32::to_bits)));
     key
 }
+
+#[test]
+fn locked_seams_keep_every_vertex_they_had() {
+    use meshlod_engine::simplify::{SimplifyOptions, simplify};
+    // A sphere whose upper and lower halves are two texture charts: the ring between them is a
+    // seam.
+    let mut sphere = procedural::icosphere(3);
+    let upper = |m: &Mesh, f: usize| m.triangle_points(f).iter().map(|p| p.z).sum::<f64>() > 0.0;
+    let uvs = (0..3 * sphere.face_count())
+        .map(|k| {
+            let p = sphere.positions[sphere.triangles[k / 3][k % 3] as usize];
+            [p[0] + if upper(&sphere, k / 3) { 2.0 } else { 0.0 }, p[1]]
+        })
+        .collect();
+    sphere.corners.uvs = Some(uvs);
+    let seam_positions = |m: &Mesh| -> std::collections::HashSet<[u32; 3]> {
+        let mut sides: std::collections::HashMap<u32, [bool; 2]> = std::collections::HashMap::new();
+        for f in 0..m.face_count() {
+            for &v in &m.triangles[f] {
+                sides.entry(v).or_default()[upper(m, f) as usize] = true;
+            }
+        }
+        sides.iter().filter(|(_, s)| s[0] && s[1]).map(|(&v, _)| m.positions[v as usize].map(f32::to_bits)).collect()
+    };
+    let before = seam_positions(&sphere);
+    assert!(before.len() > 20, "{} seam vertices", before.len());
+    let run = |lock_seams| {
+        let options = SimplifyOptions { target_ratio: Some(0.8), lock_seams, ..Default::default() };
+        let lod = simplify(&sphere, &options).unwrap().mesh;
+        let kept: std::collections::HashSet<[u32; 3]> = lod.positions.iter().map(|p| p.map(f32::to_bits)).collect();
+        before.iter().filter(|p| kept.contains(*p)).count()
+    };
+    assert_eq!(run(true), before.len(), "every seam vertex kept in place");
+    assert!(run(false) < before.len(), "without the lock the seam is simplified along itself");
+}

@@ -257,6 +257,12 @@ pub struct SimplifyArgs {
     /// Open boundaries: preserve (slide along the border) or lock (never move).
     #[arg(long, value_enum, default_value_t = BoundaryArg::Preserve)]
     pub boundary: BoundaryArg,
+    /// The same as `--boundary lock`.
+    #[arg(long)]
+    pub lock_border: bool,
+    /// Keep every vertex of a texture, normal, colour or material seam in place.
+    #[arg(long)]
+    pub lock_seams: bool,
     /// Largest change of a face normal one collapse may cause, in degrees (default 90).
     #[arg(long)]
     pub max_normal_change: Option<f64>,
@@ -305,10 +311,11 @@ impl SimplifyArgs {
                 NormalsArg::Linear => proto::NormalUpdate::Linear,
                 NormalsArg::Recompute => proto::NormalUpdate::Recompute,
             } as i32,
-            boundary: match self.boundary {
-                BoundaryArg::Preserve => proto::BoundaryMode::Preserve,
-                BoundaryArg::Lock => proto::BoundaryMode::Lock,
+            boundary: match (self.boundary, self.lock_border) {
+                (BoundaryArg::Preserve, false) => proto::BoundaryMode::Preserve,
+                _ => proto::BoundaryMode::Lock,
             } as i32,
+            lock_seams: self.lock_seams,
             max_normal_change_degrees: self.max_normal_change,
             return_progressive: self.pm.is_some(),
             compute_hausdorff: self.hausdorff,

@@ -264,6 +264,9 @@ fn convert(input: &Path, output: &Path, do_clean: bool, drop_attributes: bool) -
     if drop_attributes {
         mesh.corners = Default::default();
     }
+    if let Some(warning) = mesh.corners.not_carried_warning() {
+        eprintln!("meshlod: warning: {warning}");
+    }
     if do_clean {
         let (cleaned, report) = clean(&mesh);
         eprintln!("clean: {}", serde_json::to_string(&report)?);

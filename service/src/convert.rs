@@ -325,6 +325,7 @@ impl TryFrom<&proto::SimplifyOptions> for SimplifyOptions {
             max_normal_change_degrees: o.max_normal_change_degrees.unwrap_or(defaults.max_normal_change_degrees),
             record_progressive: o.return_progressive,
             guard: o.guard.unwrap_or(defaults.guard),
+            lock_seams: o.lock_seams,
             cancel: None,
         })
     }

@@ -132,6 +132,7 @@ pub fn simplify(
         guard: options.guard,
         warnings: simplify_warnings(o)
             .into_iter()
+            .chain(mesh.corners.not_carried_warning())
             .chain(o.return_progressive.then(|| dropped_attributes(mesh, "the progressive mesh")).flatten())
             .collect(),
         frozen_vertices: s.frozen_vertices as u32,
@@ -230,7 +231,10 @@ pub fn refine(
         rounds: s.rounds,
         etc_source: etc_source.into(),
         model_version,
-        warnings: dropped_attributes(mesh, "refinement").into_iter().collect(),
+        warnings: dropped_attributes(mesh, "refinement")
+            .into_iter()
+            .chain(mesh.corners.not_carried_warning())
+            .collect(),
     };
     Ok((result, stats))
 }

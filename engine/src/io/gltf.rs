@@ -238,7 +238,35 @@ fn library(
     let extensions_used: Vec<String> = strings("extensionsUsed").into_iter().filter(|e| named.contains(e)).collect();
     let extensions_required =
         strings("extensionsRequired").into_iter().filter(|e| extensions_used.contains(e)).collect();
-    Ok(MaterialLibrary { materials, textures, samplers, images, extensions_used, extensions_required })
+    let mut not_carried = Vec::new();
+    let mut note = |what: String| {
+        if !not_carried.contains(&what) {
+            not_carried.push(what);
+        }
+    };
+    for mesh in document.meshes() {
+        for primitive in mesh.primitives() {
+            if !is_surface(primitive.mode()) {
+                note("point and line primitives".into());
+            }
+            if primitive.morph_targets().next().is_some() {
+                note("morph targets".into());
+            }
+            for (semantic, _) in primitive.attributes() {
+                let name = semantic.to_string();
+                if !matches!(name.as_str(), "POSITION" | "NORMAL" | "TEXCOORD_0" | "COLOR_0") {
+                    note(format!("{name} values"));
+                }
+            }
+        }
+    }
+    if document.skins().next().is_some() {
+        note("skins".into());
+    }
+    if document.animations().next().is_some() {
+        note("animations".into());
+    }
+    Ok(MaterialLibrary { materials, textures, samplers, images, extensions_used, extensions_required, not_carried })
 }
 
 /// Every key of every `extensions` object inside `value`.

@@ -256,6 +256,13 @@ impl<'o> State<'o> {
         }
         // (A survivor keeps its flag: a seam vertex goes only into one on the same seam.)
         self.on_seam = seen.iter().map(|sets| sets[1] != NONE).collect();
+        if self.options.lock_seams {
+            for (vertex, &seam) in self.vertices.iter_mut().zip(&self.on_seam) {
+                if seam {
+                    vertex.kind = VertexKind::Frozen;
+                }
+            }
+        }
     }
 
     /// The input corner whose values vertex `v` has in face `f`.

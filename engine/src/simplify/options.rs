@@ -123,6 +123,9 @@ pub struct SimplifyOptions {
     /// covers quadric error's blind spot, a thin tip shortened along its own faces, at a price in
     /// time and memory given in docs/benchmarks.md; not with Melax.
     pub guard: f64,
+    /// Keep every vertex on a seam (where a vertex's corners differ in texture coordinates,
+    /// normals, colours or material) in place: seams keep every vertex they had.
+    pub lock_seams: bool,
     /// Set to `true` by another thread to stop the work; the call then returns
     /// [`MeshError::Cancelled`].
     pub cancel: Option<Arc<AtomicBool>>,
@@ -143,6 +146,7 @@ impl Default for SimplifyOptions {
             max_normal_change_degrees: DEFAULT_MAX_NORMAL_CHANGE_DEGREES,
             record_progressive: false,
             guard: 0.0,
+            lock_seams: false,
             cancel: None,
         }
     }
