@@ -37,8 +37,8 @@ impl FaceId {
 ///
 /// Each array, when present, holds one entry per triangle corner: `3 * triangles.len()` entries,
 /// in triangle order, so a vertex on a seam has different values in the faces on either side.
-/// Reading, writing, cleaning, converting and simplifying keep them (the simplifier leaves a seam's
-/// vertices in place); the progressive mesh and the refiner do not yet.
+/// Reading, writing, cleaning, converting, simplifying and the progressive mesh keep them (a seam
+/// vertex collapses only along its seam); the refiner does not yet.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct CornerAttributes {
     /// Texture coordinates per corner, with v pointing up from the image's bottom-left corner (as

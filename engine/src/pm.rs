@@ -23,7 +23,101 @@
 use serde::Serialize;
 
 use crate::error::MeshError;
-use crate::mesh::Mesh;
+use crate::mesh::{CornerAttributes, Mesh};
+
+/// The per-corner attributes of a progressive mesh (Hoppe's wedges, as references): every value
+/// is one of the input's corners, so a level's corners are indices into `values`. Kept in memory
+/// by the simplifier's progressive mesh; the `.pm` file and the contract do not carry them yet.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PmAttributes {
+    /// The values; the indices below point into them (one entry per value, every array present
+    /// of the same length).
+    pub values: CornerAttributes,
+    /// The base mesh's corners (3 per face, in its faces' corner order).
+    pub base: Vec<[u32; 3]>,
+    /// Per split, in refinement order.
+    pub splits: Vec<SplitAttributes>,
+}
+
+/// What one split restores: see [`PmAttributes`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct SplitAttributes {
+    /// The corners of the split's new faces, in the order `(vs, vt, vl)`, `(vt, vs, vr)` of those
+    /// present (unused entries are zero).
+    pub new_faces: [[u32; 3]; 2],
+    /// The faces that move from `vs` to `vt`, with the value their corner at `vt` takes.
+    pub moved: Vec<(u32, u32)>,
+}
+
+impl PmAttributes {
+    /// Number of values.
+    pub fn value_count(&self) -> usize {
+        let v = &self.values;
+        v.normals
+            .as_ref()
+            .map(Vec::len)
+            .or(v.uvs.as_ref().map(Vec::len))
+            .or(v.colors.as_ref().map(Vec::len))
+            .unwrap_or(0)
+    }
+}
+
+impl PmAttributes {
+    fn from_log(
+        a: AttributeLog<'_>,
+        final_triangles: &[[u32; 3]],
+        face_alive: &[bool],
+        log: &[CollapseRecord],
+        face_counts: &[u32],
+    ) -> PmAttributes {
+        // A removed face keeps the vertices it had when it was removed (the simplifier tracks
+        // its triangles whenever it carries attributes).
+        let corner = |f: u32, v: u32| -> u32 {
+            let k = final_triangles[f as usize].iter().position(|&x| x == v).expect("the face has the vertex");
+            a.corner_source[3 * f as usize + k]
+        };
+        let mut pm_face = vec![NO_VERTEX; final_triangles.len()];
+        let mut base = Vec::new();
+        for f in (0..final_triangles.len()).filter(|&f| face_alive[f]) {
+            pm_face[f] = base.len() as u32;
+            base.push([0, 1, 2].map(|k| a.corner_source[3 * f + k]));
+        }
+        let mut splits = Vec::with_capacity(log.len());
+        for (j, r) in log.iter().enumerate().rev() {
+            let mut id = face_counts[log.len() - 1 - j];
+            let mut new_faces = [[0; 3]; 2];
+            let mut slot = 0;
+            if r.left != NO_VERTEX {
+                new_faces[slot] =
+                    [corner(r.left_face, r.survivor), corner(r.left_face, r.removed), corner(r.left_face, r.left)];
+                pm_face[r.left_face as usize] = id;
+                (id, slot) = (id + 1, slot + 1);
+            }
+            if r.right != NO_VERTEX {
+                new_faces[slot] =
+                    [corner(r.right_face, r.removed), corner(r.right_face, r.survivor), corner(r.right_face, r.right)];
+                pm_face[r.right_face as usize] = id;
+            }
+            let start = if j == 0 { 0 } else { a.journal_ends[j - 1] as usize };
+            let moved = a.journal[start..a.journal_ends[j] as usize]
+                .iter()
+                .map(|&(f, old)| (pm_face[f as usize], old))
+                .collect();
+            splits.push(SplitAttributes { new_faces, moved });
+        }
+        PmAttributes { values: a.values.clone(), base, splits }
+    }
+}
+
+/// What the simplifier hands over to build [`PmAttributes`]: the input's values, each face's
+/// corners at the end of the run (for a removed face: when it was removed), and the journal of
+/// the values that each collapse replaced.
+pub(crate) struct AttributeLog<'a> {
+    pub values: &'a CornerAttributes,
+    pub corner_source: &'a [u32],
+    pub journal: &'a [(u32, u32)],
+    pub journal_ends: &'a [u32],
+}
 
 /// Marks an absent `vl` or `vr` (the collapsed edge was on a boundary).
 pub const NO_VERTEX: u32 = u32::MAX;
@@ -103,6 +197,8 @@ pub struct ProgressiveMesh {
     face_counts: Vec<u32>,
     /// Input vertex of each vertex (when built by the simplifier).
     input_vertex: Option<Vec<u32>>,
+    /// Per-corner attributes, when the input had them (built by the simplifier only).
+    attributes: Option<PmAttributes>,
 }
 
 impl ProgressiveMesh {
@@ -114,6 +210,7 @@ impl ProgressiveMesh {
         final_triangles: &[[u32; 3]],
         face_alive: &[bool],
         log: &[CollapseRecord],
+        attribute_log: Option<AttributeLog<'_>>,
     ) -> ProgressiveMesh {
         let n = prepared.vertex_count();
         let mut removed = vec![false; n];
@@ -159,12 +256,13 @@ impl ProgressiveMesh {
             })
             .collect();
         let input_vertex = order.iter().map(|&v| input_vertex[v as usize]).collect();
-        ProgressiveMesh {
-            base: Mesh { positions: base_positions, triangles: base_triangles, corners: Default::default() },
-            splits,
-            face_counts,
-            input_vertex: Some(input_vertex),
+        let attributes =
+            attribute_log.map(|a| PmAttributes::from_log(a, final_triangles, face_alive, log, &face_counts));
+        let mut base = Mesh { positions: base_positions, triangles: base_triangles, corners: Default::default() };
+        if let Some(attributes) = &attributes {
+            base.corners = attributes.values.pick(attributes.base.iter().flatten().map(|&k| k as usize));
         }
+        ProgressiveMesh { base, splits, face_counts, input_vertex: Some(input_vertex), attributes }
     }
 
     /// Assembles a progressive mesh from parts read elsewhere (a file, a stream), checking it by
@@ -176,7 +274,7 @@ impl ProgressiveMesh {
         for s in &splits {
             face_counts.push(face_counts.last().expect("non-empty") + s.added_faces() as u32);
         }
-        let pm = ProgressiveMesh { base, splits, face_counts, input_vertex: None };
+        let pm = ProgressiveMesh { base, splits, face_counts, input_vertex: None, attributes: None };
         let mut cursor = LodCursor::new(&pm);
         cursor.seek_level(pm.splits.len())?;
         Ok(pm)
@@ -269,6 +367,47 @@ impl ProgressiveMesh {
     pub fn cursor(&self) -> LodCursor<'_> {
         LodCursor::new(self)
     }
+
+    /// Whether the levels carry per-corner attributes.
+    pub fn has_attributes(&self) -> bool {
+        self.attributes.is_some()
+    }
+
+    /// The per-corner attributes of the levels, when there are any.
+    pub fn attributes(&self) -> Option<&PmAttributes> {
+        self.attributes.as_ref()
+    }
+
+    /// Adds per-corner attributes (read from a file), checked against the splits: every index in
+    /// range, every moved face present at its level. The base mesh takes its values.
+    pub fn with_attributes(mut self, attributes: PmAttributes) -> Result<ProgressiveMesh, MeshError> {
+        let bad =
+            |location: String, reason: String| MeshError::Parse { path: "<progressive mesh>".into(), location, reason };
+        let count = attributes.value_count() as u32;
+        let out_of_range = |ids: &[u32]| ids.iter().find(|&&k| k >= count).copied();
+        if attributes.base.len() != self.base.face_count() || attributes.splits.len() != self.splits.len() {
+            return Err(bad("attributes".into(), "do not match the base faces and the splits".into()));
+        }
+        if let Some(k) = out_of_range(attributes.base.as_flattened()) {
+            return Err(bad("base attributes".into(), format!("value {k} out of range ({count} values)")));
+        }
+        for (j, (split, a)) in self.splits.iter().zip(&attributes.splits).enumerate() {
+            let added = split.added_faces();
+            if let Some(k) = out_of_range(attributes.splits[j].new_faces[..added].as_flattened()) {
+                return Err(bad(format!("split {j} attributes"), format!("value {k} out of range ({count} values)")));
+            }
+            let faces = self.face_counts[j];
+            if let Some(&(f, k)) = a.moved.iter().find(|&&(f, k)| f >= faces || k >= count) {
+                return Err(bad(
+                    format!("split {j} attributes"),
+                    format!("moved face {f} / value {k} out of range ({faces} faces, {count} values)"),
+                ));
+            }
+        }
+        self.base.corners = attributes.values.pick(attributes.base.iter().flatten().map(|&k| k as usize));
+        self.attributes = Some(attributes);
+        Ok(self)
+    }
 }
 
 /// The mesh at one level of a progressive mesh, moved up (splits) or down (collapses) one step at
@@ -281,6 +420,11 @@ pub struct LodCursor<'p> {
     triangles: Vec<[u32; 3]>,
     vertex_faces: Vec<Vec<u32>>,
     moved: Vec<u32>,
+    /// With attributes: each face's corners (indices into the values), and the values each split
+    /// replaced, as (face, corner, value), to put back when it is undone.
+    corners: Vec<[u32; 3]>,
+    replaced: Vec<(u32, u8, u32)>,
+    replaced_ends: Vec<usize>,
 }
 
 /// `t` rotated so that `v` comes first.
@@ -312,7 +456,22 @@ impl<'p> LodCursor<'p> {
                 vertex_faces[v as usize].push(f as u32);
             }
         }
-        LodCursor { pm, level: 0, positions, triangles, vertex_faces, moved: Vec::new() }
+        let mut corners = Vec::new();
+        if let Some(a) = &pm.attributes {
+            corners.extend_from_slice(&a.base);
+            corners.resize(total_faces, [0; 3]);
+        }
+        LodCursor {
+            pm,
+            level: 0,
+            positions,
+            triangles,
+            vertex_faces,
+            moved: Vec::new(),
+            corners,
+            replaced: Vec::new(),
+            replaced_ends: Vec::new(),
+        }
     }
 
     /// Current level.
@@ -332,10 +491,14 @@ impl<'p> LodCursor<'p> {
 
     /// A copy of the current mesh.
     pub fn mesh(&self) -> Mesh {
+        let corners = match &self.pm.attributes {
+            Some(a) => a.values.pick(self.corners[..self.face_count()].iter().flatten().map(|&k| k as usize)),
+            None => CornerAttributes::default(),
+        };
         Mesh {
             positions: self.positions[..self.vertex_count()].to_vec(),
             triangles: self.triangles[..self.face_count()].to_vec(),
-            corners: Default::default(),
+            corners,
         }
     }
 
@@ -420,24 +583,38 @@ impl<'p> LodCursor<'p> {
                 }
             }
         }
+        let attributes = self.pm.attributes.as_ref().map(|a| &a.splits[self.level]);
         for i in 0..self.moved.len() {
             let f = self.moved[i];
-            for corner in self.triangles[f as usize].iter_mut() {
+            for (k, corner) in self.triangles[f as usize].iter_mut().enumerate() {
                 if *corner == vs {
                     *corner = vt;
+                    // The value the corner had before the collapse that this split undoes.
+                    if let Some(&(_, value)) = attributes.and_then(|a| a.moved.iter().find(|m| m.0 == f)) {
+                        self.replaced.push((f, k as u8, self.corners[f as usize][k]));
+                        self.corners[f as usize][k] = value;
+                    }
                 }
             }
             self.vertex_faces[vs as usize].retain(|&g| g != f);
             self.vertex_faces[vt as usize].push(f);
         }
+        if attributes.is_some() {
+            self.replaced_ends.push(self.replaced.len());
+        }
         let mut next_face = self.face_count() as u32;
+        let mut added = 0;
         for (present, t) in [(s.vl != NO_VERTEX, [vs, vt, s.vl]), (s.vr != NO_VERTEX, [vt, vs, s.vr])] {
             if present {
                 self.triangles[next_face as usize] = t;
                 for v in t {
                     self.vertex_faces[v as usize].push(next_face);
                 }
+                if let Some(a) = attributes {
+                    self.corners[next_face as usize] = a.new_faces[added];
+                }
                 next_face += 1;
+                added += 1;
             }
         }
         self.positions[vs as usize] = s.split_position;
@@ -470,5 +647,12 @@ impl<'p> LodCursor<'p> {
         }
         self.vertex_faces[s.vs as usize].extend(faces);
         self.positions[s.vs as usize] = s.collapsed_position;
+        if self.pm.attributes.is_some() {
+            self.replaced_ends.pop();
+            let start = self.replaced_ends.last().copied().unwrap_or(0);
+            for (f, k, value) in self.replaced.drain(start..).rev() {
+                self.corners[f as usize][k as usize] = value;
+            }
+        }
     }
 }

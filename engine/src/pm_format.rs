@@ -3,14 +3,23 @@
 
 use std::path::Path;
 
+use std::collections::HashMap;
+
 use crate::error::MeshError;
-use crate::mesh::Mesh;
-use crate::pm::{NO_VERTEX, ProgressiveMesh, StreamedSplit};
+use crate::mesh::{CornerAttributes, Mesh};
+use crate::pm::{NO_VERTEX, PmAttributes, ProgressiveMesh, SplitAttributes, StreamedSplit};
 
 /// First four bytes of a `.pm` file.
 pub const MAGIC: [u8; 4] = *b"MLPM";
-/// Current format version.
-pub const VERSION: u16 = 1;
+/// Newest format version: 2 adds per-corner attributes after the splits. A progressive mesh
+/// without attributes is written as version 1 (the same bytes as before version 2).
+pub const VERSION: u16 = 2;
+/// Header flag: an attribute section follows the splits (version 2).
+const HAS_ATTRIBUTES: u16 = 1;
+const ATTRIBUTE_NORMAL: u8 = 1;
+const ATTRIBUTE_UV: u8 = 2;
+const ATTRIBUTE_COLOR: u8 = 4;
+const ATTRIBUTE_UV_ORIGIN_TOP: u8 = 8;
 const HEADER_SIZE: usize = 24;
 const CHECKSUM_SIZE: usize = 8;
 /// Fewest bytes a split takes: flags, a one-byte vs, a position, the error.
@@ -52,8 +61,12 @@ pub fn encode(pm: &ProgressiveMesh) -> Vec<u8> {
     let base = pm.base();
     let mut out = Vec::with_capacity(HEADER_SIZE + 24 * base.face_count() + 26 * pm.levels() + CHECKSUM_SIZE);
     out.extend_from_slice(&MAGIC);
-    out.extend_from_slice(&VERSION.to_le_bytes());
-    out.extend_from_slice(&0u16.to_le_bytes());
+    let attributes = pm
+        .attributes()
+        .filter(|a| !(a.values.normals.is_none() && a.values.uvs.is_none() && a.values.colors.is_none()));
+    let (version, flags) = if attributes.is_some() { (2u16, HAS_ATTRIBUTES) } else { (1, 0) };
+    out.extend_from_slice(&version.to_le_bytes());
+    out.extend_from_slice(&flags.to_le_bytes());
     out.extend_from_slice(&(base.vertex_count() as u32).to_le_bytes());
     out.extend_from_slice(&(base.face_count() as u32).to_le_bytes());
     out.extend_from_slice(&(pm.levels() as u32).to_le_bytes());
@@ -83,9 +96,135 @@ pub fn encode(pm: &ProgressiveMesh) -> Vec<u8> {
         }
         out.extend_from_slice(&s.error.to_le_bytes());
     }
+    if let Some(a) = attributes {
+        encode_attributes(&mut out, pm, a);
+    }
     let checksum = fnv1a(&out);
     out.extend_from_slice(&checksum.to_le_bytes());
     out
+}
+
+/// The attribute section (docs/pm-format.md): the distinct values in order of first use, then
+/// each base face's corners, then per split its new faces' corners and its moved faces.
+/// Materials are not written.
+fn encode_attributes(out: &mut Vec<u8>, pm: &ProgressiveMesh, a: &PmAttributes) {
+    let v = &a.values;
+    let mask = if v.normals.is_some() { ATTRIBUTE_NORMAL } else { 0 }
+        | if v.uvs.is_some() { ATTRIBUTE_UV } else { 0 }
+        | if v.colors.is_some() { ATTRIBUTE_COLOR } else { 0 }
+        | if v.uv_origin_top { ATTRIBUTE_UV_ORIGIN_TOP } else { 0 };
+    let floats = |k: u32| -> Vec<f32> {
+        let k = k as usize;
+        let mut f = Vec::with_capacity(9);
+        f.extend(v.normals.iter().flat_map(|n| n[k]));
+        f.extend(v.uvs.iter().flat_map(|u| u[k]));
+        f.extend(v.colors.iter().flat_map(|c| c[k]));
+        f
+    };
+    // Every index in the order it is written, renumbered to distinct values in order of first use.
+    let mut ids: Vec<u32> = a.base.iter().flatten().copied().collect();
+    for (split, s) in pm.splits().iter().zip(&a.splits) {
+        ids.extend(s.new_faces[..split.added_faces()].iter().flatten());
+        ids.extend(s.moved.iter().map(|m| m.1));
+    }
+    let mut number: HashMap<Vec<u32>, u32> = HashMap::new();
+    let mut values: Vec<Vec<f32>> = Vec::new();
+    let renumbered: Vec<u32> = ids
+        .iter()
+        .map(|&k| {
+            let value = floats(k);
+            *number.entry(value.iter().map(|x| x.to_bits()).collect()).or_insert_with(|| {
+                values.push(value);
+                values.len() as u32 - 1
+            })
+        })
+        .collect();
+    out.push(mask);
+    put_varint(out, values.len() as u64);
+    for value in &values {
+        put_f32s(out, value);
+    }
+    let mut next = renumbered.iter();
+    let mut id = || *next.next().expect("one renumbered index per index");
+    for _ in 0..3 * a.base.len() {
+        put_varint(out, id() as u64);
+    }
+    for (split, s) in pm.splits().iter().zip(&a.splits) {
+        for _ in 0..3 * split.added_faces() {
+            put_varint(out, id() as u64);
+        }
+        put_varint(out, s.moved.len() as u64);
+        for &(face, _) in &s.moved {
+            put_varint(out, face as u64);
+            put_varint(out, id() as u64);
+        }
+    }
+}
+
+/// Reads the attribute section written by [`encode_attributes`].
+fn decode_attributes(r: &mut Reader, base_faces: usize, added: &[usize]) -> Result<PmAttributes, MeshError> {
+    let mask = r.take(1)?[0];
+    if mask & !(ATTRIBUTE_NORMAL | ATTRIBUTE_UV | ATTRIBUTE_COLOR | ATTRIBUTE_UV_ORIGIN_TOP) != 0
+        || mask & (ATTRIBUTE_NORMAL | ATTRIBUTE_UV | ATTRIBUTE_COLOR) == 0
+    {
+        return Err(r.error(format!("invalid attribute mask {mask:#04x}")));
+    }
+    let width = 3 * (mask & ATTRIBUTE_NORMAL != 0) as usize
+        + 2 * (mask & ATTRIBUTE_UV != 0) as usize
+        + 4 * (mask & ATTRIBUTE_COLOR != 0) as usize;
+    let count = r.varint()?;
+    // Each value takes 4 bytes per float: a count the remaining bytes cannot hold is refused
+    // before anything is allocated from it.
+    if count.saturating_mul(4 * width as u64) > (r.bytes.len() - r.offset) as u64 {
+        return Err(r.error(format!("{count} attribute values do not fit in the file")));
+    }
+    let mut values = CornerAttributes {
+        normals: (mask & ATTRIBUTE_NORMAL != 0).then(Vec::new),
+        uvs: (mask & ATTRIBUTE_UV != 0).then(Vec::new),
+        colors: (mask & ATTRIBUTE_COLOR != 0).then(Vec::new),
+        uv_origin_top: mask & ATTRIBUTE_UV_ORIGIN_TOP != 0,
+        ..Default::default()
+    };
+    for _ in 0..count {
+        if let Some(n) = &mut values.normals {
+            n.push([r.f32()?, r.f32()?, r.f32()?]);
+        }
+        if let Some(u) = &mut values.uvs {
+            u.push([r.f32()?, r.f32()?]);
+        }
+        if let Some(c) = &mut values.colors {
+            c.push([r.f32()?, r.f32()?, r.f32()?, r.f32()?]);
+        }
+    }
+    let index = |r: &mut Reader| -> Result<u32, MeshError> {
+        let k = r.varint()?;
+        if k >= count {
+            return Err(r.error(format!("attribute value {k} out of range ({count} values)")));
+        }
+        Ok(k as u32)
+    };
+    let mut base = Vec::with_capacity(base_faces);
+    for _ in 0..base_faces {
+        base.push([index(r)?, index(r)?, index(r)?]);
+    }
+    let mut splits = Vec::with_capacity(added.len());
+    for &faces in added {
+        let mut new_faces = [[0; 3]; 2];
+        for face in new_faces.iter_mut().take(faces) {
+            *face = [index(r)?, index(r)?, index(r)?];
+        }
+        let moved_count = r.varint()?;
+        if moved_count.saturating_mul(2) > (r.bytes.len() - r.offset) as u64 {
+            return Err(r.error(format!("{moved_count} moved faces do not fit in the file")));
+        }
+        let mut moved = Vec::with_capacity(moved_count as usize);
+        for _ in 0..moved_count {
+            let face = u32::try_from(r.varint()?).map_err(|_| r.error("face index too large"))?;
+            moved.push((face, index(r)?));
+        }
+        splits.push(SplitAttributes { new_faces, moved });
+    }
+    Ok(PmAttributes { values, base, splits })
 }
 
 /// Writes a `.pm` file.
@@ -153,10 +292,17 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<ProgressiveMesh, MeshError> {
         return Err(MeshError::parse(path, "byte 0", "not a meshlod .pm file (bad magic)"));
     }
     let version = u16::from_le_bytes(r.take(2)?.try_into().expect("2 bytes"));
-    if version != VERSION {
-        return Err(MeshError::parse(path, "byte 4", format!("format version {version}; this reader knows {VERSION}")));
+    if version == 0 || version > VERSION {
+        return Err(MeshError::parse(
+            path,
+            "byte 4",
+            format!("format version {version}; this reader knows 1 to {VERSION}"),
+        ));
     }
-    r.take(2)?; // flags, reserved
+    let flags = u16::from_le_bytes(r.take(2)?.try_into().expect("2 bytes"));
+    if flags & !HAS_ATTRIBUTES != 0 || (version == 1 && flags != 0) {
+        return Err(MeshError::parse(path, "byte 6", format!("unknown flags {flags:#06x} for version {version}")));
+    }
     let (payload, stored) = bytes.split_at(bytes.len() - CHECKSUM_SIZE);
     if fnv1a(payload) != u64::from_le_bytes(stored.try_into().expect("8 bytes")) {
         return Err(MeshError::parse(path, "checksum", "checksum mismatch: the file is corrupt or truncated"));
@@ -222,14 +368,26 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<ProgressiveMesh, MeshError> {
         let error = r.f32()?;
         splits.push(StreamedSplit { vs: vs as u32, vl, vr, new_position, split_position, error });
     }
+    let attributes = if flags & HAS_ATTRIBUTES != 0 {
+        let added: Vec<usize> =
+            splits.iter().map(|s| (s.vl != NO_VERTEX) as usize + (s.vr != NO_VERTEX) as usize).collect();
+        Some(decode_attributes(&mut r, face_count, &added)?)
+    } else {
+        None
+    };
     if r.offset != r_bytes.len() {
-        return Err(r.error(format!("{} unexpected bytes after the last split", r_bytes.len() - r.offset)));
+        return Err(r.error(format!("{} unexpected bytes after the last section", r_bytes.len() - r.offset)));
     }
     let base = Mesh { positions, triangles, corners: Default::default() };
-    ProgressiveMesh::from_stream(base, splits).map_err(|e| match e {
+    let named = |e: MeshError| match e {
         MeshError::Parse { location, reason, .. } => MeshError::Parse { path: path.to_path_buf(), location, reason },
         other => other,
-    })
+    };
+    let pm = ProgressiveMesh::from_stream(base, splits).map_err(named)?;
+    match attributes {
+        Some(a) => pm.with_attributes(a).map_err(named),
+        None => Ok(pm),
+    }
 }
 
 /// Reads a `.pm` file.

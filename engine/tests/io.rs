@@ -729,3 +729,97 @@ fn locked_seams_keep_every_vertex_they_had() {
     assert_eq!(run(true), before.len(), "every seam vertex kept in place");
     assert!(run(false) < before.len(), "without the lock the seam is simplified along itself");
 }
+
+/// Each face as its corners' (position, values) bits, rotated to start at the smallest, sorted:
+/// two meshes with the same faces, in any order and rotation, give the same list.
+fn face_multiset(m: &Mesh) -> Vec<[Vec<u32>; 3]> {
+    let corner = |k: usize| {
+        let mut key: Vec<u32> = m.positions[m.triangles[k / 3][k % 3] as usize].map(f32::to_bits).to_vec();
+        key.extend(corner_key(m, k));
+        key.extend(m.corners.materials.iter().map(|x| x[k]));
+        key
+    };
+    let mut faces: Vec<[Vec<u32>; 3]> = (0..m.face_count())
+        .map(|f| {
+            let c = [corner(3 * f), corner(3 * f + 1), corner(3 * f + 2)];
+            let first = (0..3).min_by(|&i, &j| c[i].cmp(&c[j])).unwrap();
+            [c[first].clone(), c[(first + 1) % 3].clone(), c[(first + 2) % 3].clone()]
+        })
+        .collect();
+    faces.sort();
+    faces
+}
+
+#[test]
+fn progressive_meshes_carry_attributes_exactly() {
+    use meshlod_engine::simplify::{SimplifyOptions, simplify};
+    // Always: the textured cube's sphere-like cousin, a procedural sphere with a seam.
+    let mut meshes: Vec<(String, Mesh)> = Vec::new();
+    let mut sphere = procedural::icosphere(3);
+    let uvs = (0..3 * sphere.face_count())
+        .map(|k| {
+            let f = k / 3;
+            let upper = sphere.triangle_points(f).iter().map(|p| p.z).sum::<f64>() > 0.0;
+            let p = sphere.positions[sphere.triangles[f][k % 3] as usize];
+            [p[0] + if upper { 2.0 } else { 0.0 }, p[1]]
+        })
+        .collect();
+    sphere.corners.uvs = Some(uvs);
+    meshes.push(("seamed sphere".into(), sphere));
+    if let Some(dir) = meshlod_engine::datasets::require_shared_textured("pm_attributes") {
+        for row in textured_manifest(&dir) {
+            meshes.push((row["file"].clone(), read_mesh(dir.join(&row["file"])).unwrap()));
+        }
+        if let Some(spot) = meshlod_engine::datasets::shared_mesh("spot") {
+            meshes.push(("spot".into(), read_mesh(spot).unwrap()));
+        }
+    }
+    for (name, mesh) in meshes {
+        let options = SimplifyOptions { target_ratio: Some(0.99), record_progressive: true, ..Default::default() };
+        let out = simplify(&mesh, &options).unwrap();
+        let pm = out.progressive.as_ref().unwrap();
+        assert!(pm.has_attributes(), "{name}");
+        // The base is the simplified mesh; the finest level is the input, every value bit for bit.
+        assert!(face_multiset(pm.base()) == face_multiset(&out.mesh), "{name}: the base is not the result");
+        let full = pm.at_level(pm.levels());
+        assert_eq!(full.corners.names(), mesh.corners.names(), "{name}");
+        assert!(face_multiset(&full) == face_multiset(&mesh), "{name}: the finest level is not the input");
+        // Every level in between has only values the input had at that position, and coming back
+        // down gives the base again.
+        let input: std::collections::HashSet<Vec<u32>> = face_multiset(&mesh).into_iter().flatten().collect();
+        let mut cursor = pm.cursor();
+        for level in [pm.levels() / 3, 2 * pm.levels() / 3, pm.levels(), 0] {
+            cursor.seek_level(level).unwrap();
+            let m = cursor.mesh();
+            m.check().unwrap();
+            for corner in face_multiset(&m).into_iter().flatten() {
+                assert!(input.contains(&corner), "{name}: level {level} has a corner the input never had");
+            }
+        }
+        assert!(face_multiset(&cursor.mesh()) == face_multiset(pm.base()), "{name}: back down, not the base");
+        // Through a `.pm` file (version 2): the same levels, materials aside (not written).
+        let bytes = meshlod_engine::pm_format::encode(pm);
+        assert_eq!(u16::from_le_bytes([bytes[4], bytes[5]]), 2, "{name}: attributes make a version 2 file");
+        let back = meshlod_engine::pm_format::decode(&bytes, Path::new("back.pm")).unwrap();
+        let strip = |m: &Mesh| {
+            let mut m = m.clone();
+            (m.corners.materials, m.corners.library) = (None, None);
+            m
+        };
+        assert!(face_multiset(back.base()) == face_multiset(&strip(&out.mesh)), "{name}: base through the file");
+        let finest = back.at_level(back.levels());
+        assert!(face_multiset(&finest) == face_multiset(&strip(&mesh)), "{name}: the input through the file");
+        // A file cut anywhere in its attribute section is refused, never half read.
+        for cut in [bytes.len() - 9, bytes.len() - 40, bytes.len() / 2] {
+            assert!(meshlod_engine::pm_format::decode(&bytes[..cut], Path::new("cut.pm")).is_err(), "{name}: {cut}");
+        }
+    }
+    // Without attributes: version 1, as before.
+    let plain = simplify(
+        &procedural::icosphere(2),
+        &SimplifyOptions { target_ratio: Some(0.5), record_progressive: true, ..Default::default() },
+    )
+    .unwrap();
+    let bytes = meshlod_engine::pm_format::encode(plain.progressive.as_ref().unwrap());
+    assert_eq!(u16::from_le_bytes([bytes[4], bytes[5]]), 1);
+}

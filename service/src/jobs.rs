@@ -130,11 +130,7 @@ pub fn simplify(
         seconds: s.seconds,
         w_candidates,
         guard: options.guard,
-        warnings: simplify_warnings(o)
-            .into_iter()
-            .chain(mesh.corners.not_carried_warning())
-            .chain(o.return_progressive.then(|| dropped_attributes(mesh, "the progressive mesh")).flatten())
-            .collect(),
+        warnings: simplify_warnings(o).into_iter().chain(mesh.corners.not_carried_warning()).collect(),
         frozen_vertices: s.frozen_vertices as u32,
         target_faces: s.target_faces as u32,
         rejected: s.rejected as u64,

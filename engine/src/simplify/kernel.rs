@@ -60,6 +60,11 @@ pub(crate) struct State<'o> {
     /// such a vertex go only into another on the seam, so with one end on a seam, the ranking
     /// keeps that end in place ([`State::choose`]) rather than picking a collapse rule 7 refuses.
     pub(super) on_seam: Vec<bool>,
+    /// With attributes and a progressive mesh to record: per collapse, the corners of the removed
+    /// vertex that took new values, as (face, the input corner whose values it had before), and
+    /// where each collapse's entries end. The vertex splits restore them.
+    pub(crate) journal: Vec<(u32, u32)>,
+    pub(crate) journal_ends: Vec<u32>,
 }
 
 /// What ranking an edge reads of each endpoint, in one 128-byte block (two adjacent cache lines)
@@ -153,6 +158,8 @@ impl<'o> State<'o> {
             attributes: CornerAttributes::default(),
             corner_source: Vec::new(),
             on_seam: Vec::new(),
+            journal: Vec::new(),
+            journal_ends: Vec::new(),
         };
         if options.guard > 0.0 {
             state.guard = DistanceGuard::new(mesh, &state.fans);
@@ -488,6 +495,9 @@ impl<'o> State<'o> {
                         if let Some([(b_first, a_first), (_, a_second)]) = sides {
                             let at = 3 * f as usize + k;
                             let first = self.attributes.same(self.corner_source[at] as usize, b_first as usize);
+                            if self.options.record_progressive {
+                                self.journal.push((f, self.corner_source[at]));
+                            }
                             self.corner_source[at] = if first { a_first } else { a_second };
                         }
                     }
@@ -519,6 +529,9 @@ impl<'o> State<'o> {
         self.update_guard(a, b);
         self.version[a as usize] = self.version[a as usize].wrapping_add(1);
         self.version[b as usize] = self.version[b as usize].wrapping_add(1);
+        if sides.is_some() && self.options.record_progressive {
+            self.journal_ends.push(self.journal.len() as u32);
+        }
         record
     }
 

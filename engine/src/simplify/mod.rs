@@ -156,6 +156,12 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
             &state.triangles,
             &state.face_alive,
             &run.log,
+            (!state.corner_source.is_empty()).then(|| crate::pm::AttributeLog {
+                values: &state.attributes,
+                corner_source: &state.corner_source,
+                journal: &state.journal,
+                journal_ends: &state.journal_ends,
+            }),
         )
     });
     let frozen_vertices = state.vertices.iter().filter(|v| v.kind == VertexKind::Frozen).count();

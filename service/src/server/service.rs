@@ -110,6 +110,11 @@ impl MeshLodService {
             let mut options = request.options.unwrap_or_default();
             options.return_progressive |= progressive;
             let mut run = jobs::simplify(&mesh, &options, predictor.as_deref(), Some(cancel))?;
+            // The engine's progressive mesh carries the attributes (and a `.pm` file does); the
+            // contract's ProgressiveMesh does not yet.
+            if options.return_progressive {
+                run.stats.warnings.extend(jobs::dropped_attributes(&mesh, "the contract's ProgressiveMesh"));
+            }
             run.encoded = convert::encode_mesh(&run.result.mesh, format)?;
             Ok(run)
         }
