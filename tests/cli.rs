@@ -386,12 +386,15 @@ fn attributes_are_listed_converted_kept_by_simplify_and_their_loss_is_said() {
     for key in ["attributes", "faces", "seam_edges"] {
         assert_eq!(rebuilt[key], info[key], "{key}");
     }
-    // Refinement does not carry them yet either.
-    let refined = ok_json(&["refine", s(&cube), "-o", s(&dir.join("fine.obj")), "--etc", "1", "--json"]);
-    assert!(
-        refined["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains("refinement")),
-        "{refined}"
-    );
+    // Refinement carries them: subdivision interpolates them face by face, seams kept.
+    for mode in ["subdivide", "simplify", "both"] {
+        let fine = dir.join(format!("fine-{mode}.obj"));
+        let refined = ok_json(&["refine", s(&cube), "-o", s(&fine), "--etc", "1", "--mode", mode, "--json"]);
+        assert_eq!(refined["warnings"], serde_json::json!([]), "{mode}: {refined}");
+        let kept = ok_json(&["info", s(&fine), "--json"]);
+        assert_eq!(kept["attributes"], info["attributes"], "{mode}");
+        assert!(kept["seam_edges"].as_u64().unwrap() >= 12, "{mode}: {kept}");
+    }
 }
 
 #[test]

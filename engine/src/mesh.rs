@@ -37,8 +37,8 @@ impl FaceId {
 ///
 /// Each array, when present, holds one entry per triangle corner: `3 * triangles.len()` entries,
 /// in triangle order, so a vertex on a seam has different values in the faces on either side.
-/// Reading, writing, cleaning, converting, simplifying and the progressive mesh keep them (a seam
-/// vertex collapses only along its seam); the refiner does not yet.
+/// Reading, writing, cleaning, converting, simplifying, the progressive mesh and refinement keep
+/// them (a seam vertex collapses only along its seam; subdivision interpolates them per face).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct CornerAttributes {
     /// Texture coordinates per corner, with v pointing up from the image's bottom-left corner (as

@@ -730,15 +730,18 @@ fn locked_seams_keep_every_vertex_they_had() {
     assert!(run(false) < before.len(), "without the lock the seam is simplified along itself");
 }
 
+/// Corner `k`'s position and values, as bits (the key of [`face_multiset`]).
+fn corner_at(m: &Mesh, k: usize) -> Vec<u32> {
+    let mut key: Vec<u32> = m.positions[m.triangles[k / 3][k % 3] as usize].map(f32::to_bits).to_vec();
+    key.extend(corner_key(m, k));
+    key.extend(m.corners.materials.iter().map(|x| x[k]));
+    key
+}
+
 /// Each face as its corners' (position, values) bits, rotated to start at the smallest, sorted:
 /// two meshes with the same faces, in any order and rotation, give the same list.
 fn face_multiset(m: &Mesh) -> Vec<[Vec<u32>; 3]> {
-    let corner = |k: usize| {
-        let mut key: Vec<u32> = m.positions[m.triangles[k / 3][k % 3] as usize].map(f32::to_bits).to_vec();
-        key.extend(corner_key(m, k));
-        key.extend(m.corners.materials.iter().map(|x| x[k]));
-        key
-    };
+    let corner = |k: usize| corner_at(m, k);
     let mut faces: Vec<[Vec<u32>; 3]> = (0..m.face_count())
         .map(|f| {
             let c = [corner(3 * f), corner(3 * f + 1), corner(3 * f + 2)];
@@ -822,4 +825,43 @@ fn progressive_meshes_carry_attributes_exactly() {
     .unwrap();
     let bytes = meshlod_engine::pm_format::encode(plain.progressive.as_ref().unwrap());
     assert_eq!(u16::from_le_bytes([bytes[4], bytes[5]]), 1);
+}
+
+#[test]
+fn refinement_carries_attributes_both_ways() {
+    use meshlod_engine::refine::{RefineMode, RefineOptions, refine};
+    let mut meshes: Vec<(String, Mesh)> = vec![("textured cube".into(), textured_cube())];
+    if let Some(dir) = meshlod_engine::datasets::require_shared_textured("refine_attributes") {
+        for row in textured_manifest(&dir) {
+            meshes.push((row["file"].clone(), read_mesh(dir.join(&row["file"])).unwrap()));
+        }
+    }
+    for (name, mesh) in meshes {
+        let input: std::collections::HashSet<Vec<u32>> = face_multiset(&mesh).into_iter().flatten().collect();
+        let seams_before = meshlod_engine::validate::validate(&mesh).seam_edges;
+        let values: std::collections::HashSet<Vec<u32>> = input.iter().map(|c| c[3..].to_vec()).collect();
+        for mode in [RefineMode::Subdivide, RefineMode::Simplify, RefineMode::Both] {
+            let options = RefineOptions { etc: Some(1.0), mode, ..Default::default() };
+            let out = refine(&mesh, &options).unwrap_or_else(|e| panic!("{name} {mode:?}: {e}"));
+            let m = &out.mesh;
+            m.check().unwrap();
+            assert_eq!(m.corners.names(), mesh.corners.names(), "{name} {mode:?}");
+            let report = meshlod_engine::validate::validate(m);
+            assert!(report.seam_edges > 0 || seams_before == 0, "{name} {mode:?}: the seams are gone");
+            // Triangle collapse keeps the input's values; subdivision keeps them at the input's
+            // vertices and interpolates them, face by face, at the new ones (after a collapse, in
+            // mode both, a new vertex may land on an old position: only the names are checked).
+            // (Subdivision keeps the input's used vertices first, in order; new ones follow, and
+            // some land on old positions, e.g. on edges of zero length at a texture pole.)
+            let old = mesh.triangles.iter().flatten().collect::<std::collections::HashSet<_>>().len() as u32;
+            for (k, corner) in (0..3 * m.face_count()).map(|k| (k, corner_at(m, k))) {
+                if mode == RefineMode::Simplify {
+                    // (A collapse may move the vertex: its values are the input's.)
+                    assert!(values.contains(&corner[3..]), "{name} {mode:?}: a value the input never had");
+                } else if mode == RefineMode::Subdivide && m.triangles[k / 3][k % 3] < old {
+                    assert!(input.contains(&corner), "{name} {mode:?}: a corner the input never had");
+                }
+            }
+        }
+    }
 }

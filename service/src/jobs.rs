@@ -227,10 +227,20 @@ pub fn refine(
         rounds: s.rounds,
         etc_source: etc_source.into(),
         model_version,
-        warnings: dropped_attributes(mesh, "refinement")
-            .into_iter()
-            .chain(mesh.corners.not_carried_warning())
-            .collect(),
+        warnings: {
+            let kept = result.mesh.corners.names();
+            let lost: Vec<&str> = mesh.corners.names().into_iter().filter(|n| !kept.contains(n)).collect();
+            (!lost.is_empty())
+                .then(|| {
+                    format!(
+                        "the input's attributes ({}) are not kept: refine's triangle collapse (modes simplify and both) does not carry attributes yet, the result has positions only",
+                        lost.join(", ")
+                    )
+                })
+                .into_iter()
+                .chain(mesh.corners.not_carried_warning())
+                .collect()
+        },
     };
     Ok((result, stats))
 }

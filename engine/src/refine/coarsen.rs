@@ -105,6 +105,8 @@ pub(crate) fn coarsen(
         ..Default::default()
     };
     let (mut state, _) = State::new(mesh, &options);
+    // Attributes ride along as in the simplifier: a seam vertex collapses only along its seam.
+    state.carry_attributes(mesh);
     let vertex_count = mesh.vertex_count();
     let mut scratch = Vec::new();
     let mut mean_length: Vec<f64> = (0..vertex_count as u32)

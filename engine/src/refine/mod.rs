@@ -24,7 +24,6 @@ pub use subdivide::subdivide_uniform;
 
 use crate::error::MeshError;
 use crate::mesh::Mesh;
-use crate::simplify::prepare;
 use crate::topology::Topology;
 
 /// Which side of the threshold is acted on.
@@ -230,7 +229,8 @@ fn check_fans(mesh: &Mesh) -> Result<(), MeshError> {
 pub fn refine(mesh: &Mesh, options: &RefineOptions) -> Result<Refined, MeshError> {
     let started = Instant::now();
     mesh.check()?;
-    let (prepared, _, _) = prepare(mesh);
+    // Subdivision carries the attributes (interpolated per face); triangle collapse drops them.
+    let prepared = crate::simplify::prepare_with_attributes(mesh);
     if prepared.triangles.is_empty() {
         return Err(MeshError::Empty { what: "no faces" });
     }

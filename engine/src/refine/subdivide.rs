@@ -207,43 +207,89 @@ pub(crate) fn subdivide_edges(mesh: &Mesh, topology: &Topology, split_edge: &[bo
         let p = positions[v as usize];
         DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
     };
+    // Each new face as local corners of its parent: 0–2 its corners, 3–5 the midpoints of its
+    // edges (k, k + 1), whose values are the average of the parent's at the edge's two corners —
+    // in that face, so the two sides of a seam each keep their own values.
     let mut triangles = Vec::with_capacity(mesh.face_count() * 2);
+    let mut locals: Vec<(usize, [usize; 3])> = Vec::new();
+    let carry = !mesh.corners.is_empty();
     for (f, &t) in mesh.triangles.iter().enumerate() {
         let mid: [u32; 3] =
             topology.face_edges[f].map(|e| if e == NO_EDGE { u32::MAX } else { edge_vertex[e as usize] });
+        let global = |l: usize| if l < 3 { t[l] } else { mid[l - 3] };
+        let mut push = |l: [usize; 3]| {
+            triangles.push(l.map(global));
+            if carry {
+                locals.push((f, l));
+            }
+        };
         let count = mid.iter().filter(|&&m| m != u32::MAX).count();
         match count {
-            0 => triangles.push(t),
+            0 => push([0, 1, 2]),
             1 => {
                 let i = mid.iter().position(|&m| m != u32::MAX).expect("one");
-                let (a, b, c, m) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3], mid[i]);
-                triangles.push([a, m, c]);
-                triangles.push([m, b, c]);
+                let (a, b, c, m) = (i, (i + 1) % 3, (i + 2) % 3, 3 + i);
+                push([a, m, c]);
+                push([m, b, c]);
             }
             2 => {
                 // Rotate so that edges a-b (m1) and b-c (m2) are split and c-a is not.
                 let i = mid.iter().position(|&m| m == u32::MAX).expect("one unsplit");
-                let (c, a, b) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
-                let (m1, m2) = (mid[(i + 1) % 3], mid[(i + 2) % 3]);
-                triangles.push([m1, b, m2]);
-                let q = |x, y, z| quality(point(x, &positions), point(y, &positions), point(z, &positions));
+                let (c, a, b) = (i, (i + 1) % 3, (i + 2) % 3);
+                let (m1, m2) = (3 + (i + 1) % 3, 3 + (i + 2) % 3);
+                push([m1, b, m2]);
+                let q = |x, y, z| {
+                    let p = |l| point(global(l), &positions);
+                    quality(p(x), p(y), p(z))
+                };
                 // Quad a-m1-m2-c: the diagonal whose worse triangle is better.
                 if q(a, m1, m2).min(q(a, m2, c)) >= q(a, m1, c).min(q(m1, m2, c)) {
-                    triangles.push([a, m1, m2]);
-                    triangles.push([a, m2, c]);
+                    push([a, m1, m2]);
+                    push([a, m2, c]);
                 } else {
-                    triangles.push([a, m1, c]);
-                    triangles.push([m1, m2, c]);
+                    push([a, m1, c]);
+                    push([m1, m2, c]);
                 }
             }
             _ => {
-                let (a, b, c) = (t[0], t[1], t[2]);
-                let (mab, mbc, mca) = (mid[0], mid[1], mid[2]);
-                triangles.extend([[a, mab, mca], [mab, b, mbc], [mca, mbc, c], [mab, mbc, mca]]);
+                for l in [[0, 3, 5], [3, 1, 4], [5, 4, 2], [3, 4, 5]] {
+                    push(l);
+                }
             }
         }
     }
-    Mesh { positions, triangles, corners: Default::default() }
+    let corners = if carry { interpolate_corners(&mesh.corners, &locals) } else { Default::default() };
+    Mesh { positions, triangles, corners }
+}
+
+/// The corner values of new faces given as (parent face, local corners): a parent corner's value,
+/// or for a midpoint the mean of its edge's two corners (normals made unit again; a material is
+/// the parent's).
+fn interpolate_corners(
+    parent: &crate::mesh::CornerAttributes,
+    locals: &[(usize, [usize; 3])],
+) -> crate::mesh::CornerAttributes {
+    // The two parent corners a local corner averages (the same one twice for a corner).
+    let ends = |f: usize, l: usize| if l < 3 { (3 * f + l, 3 * f + l) } else { (3 * f + l - 3, 3 * f + (l - 2) % 3) };
+    fn mean<const N: usize>(values: &[[f32; N]], (x, y): (usize, usize)) -> [f32; N] {
+        if x == y { values[x] } else { std::array::from_fn(|k| 0.5 * (values[x][k] + values[y][k])) }
+    }
+    let corners = || locals.iter().flat_map(|&(f, l)| l.map(|l| ends(f, l)));
+    let unit = |n: [f32; 3]| {
+        let length = n.iter().map(|c| c * c).sum::<f32>().sqrt();
+        if length > 0.0 && (length - 1.0).abs() > 1e-6 { n.map(|c| c / length) } else { n }
+    };
+    crate::mesh::CornerAttributes {
+        uvs: parent.uvs.as_ref().map(|v| corners().map(|e| mean(v, e)).collect()),
+        normals: parent
+            .normals
+            .as_ref()
+            .map(|v| corners().map(|e| if e.0 == e.1 { v[e.0] } else { unit(mean(v, e)) }).collect()),
+        colors: parent.colors.as_ref().map(|v| corners().map(|e| mean(v, e)).collect()),
+        materials: parent.materials.as_ref().map(|m| corners().map(|(x, _)| m[x]).collect()),
+        library: parent.library.clone(),
+        uv_origin_top: parent.uv_origin_top,
+    }
 }
 
 /// Uniform modified-butterfly subdivision: every edge split, every face 1→4.

@@ -53,6 +53,11 @@ pub(super) fn prepare_in_place(mesh: &Mesh) -> (Cow<'_, Mesh>, Vec<u32>, usize) 
     (Cow::Owned(Mesh { positions, triangles, corners }), input_vertex, dropped)
 }
 
+/// [`prepare`] keeping the per-corner attributes.
+pub(crate) fn prepare_with_attributes(mesh: &Mesh) -> Mesh {
+    prepare_in_place(mesh).0.into_owned()
+}
+
 /// Drops faces that repeat a vertex and vertices that no face uses. Returns the prepared mesh
 /// (without per-corner attributes: the public form, for the progressive mesh), the input index of each kept vertex, and the number of
 /// dropped faces.

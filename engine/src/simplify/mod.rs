@@ -96,6 +96,7 @@ use std::time::Instant;
 
 pub(crate) use classify::VertexKind;
 pub use classify::prepare;
+pub(crate) use classify::prepare_with_attributes;
 pub(crate) use kernel::State;
 pub use legality::{FOLD_DOT, MIN_TRIANGLE_QUALITY};
 pub use options::{
