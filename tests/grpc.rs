@@ -345,14 +345,22 @@ async fn encoded_glb_is_read_and_its_attributes_kept() {
     let response = client.simplify(request).await.expect("a GLB is read").into_inner();
     let stats = response.stats.unwrap();
     assert_eq!(stats.faces_in, 4);
-    // The result keeps its texture coordinates, one per vertex; the progressive mesh does not.
+    // The result keeps its texture coordinates, one per vertex; so does the progressive mesh, in
+    // the `.pm` file that comes with it (its structured base has positions only, numbered as the
+    // splits number them).
     let mesh = response.mesh.unwrap();
     assert_eq!(mesh.uvs.len(), 2 * mesh.positions.len() / 3);
-    assert!(
-        stats.warnings.iter().any(|w| w.contains("attributes (uv, material) are not kept")),
-        "{:?}",
-        stats.warnings
-    );
+    assert!(stats.warnings.is_empty(), "{:?}", stats.warnings);
+    let pm = response.progressive.unwrap();
+    let base = pm.base.as_ref().unwrap();
+    assert!(base.uvs.is_empty());
+    let rebuilt = progressive_from_proto(base, &pm.splits).expect("the splits fit the base");
+    let file = meshlod_engine::pm_format::decode(&pm.file, std::path::Path::new("response.pm")).unwrap();
+    assert!(file.has_attributes());
+    assert_eq!(file.levels(), rebuilt.levels());
+    let finest = file.at_level(file.levels());
+    assert_eq!(finest.face_count(), 4);
+    assert_eq!(finest.corners.names(), ["uv"]);
     // A GLB whose buffer lives in another file cannot be read from a request.
     let gltf =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../engine/tests/fuzz-corpus/quad-nodes.gltf"))

@@ -142,6 +142,10 @@ impl Executor for Remote {
         let out =
             mesh_from_proto(response.mesh.as_ref().context("response without mesh")?, "mesh", &MeshLimits::default())?;
         let progressive = match &response.progressive {
+            // With attributes the server sends the `.pm` file too: the same bytes as a local run.
+            Some(pm) if !pm.file.is_empty() => {
+                Some(meshlod_engine::pm_format::decode(&pm.file, std::path::Path::new("response.pm"))?)
+            }
             Some(pm) => {
                 Some(progressive_from_proto(pm.base.as_ref().context("progressive mesh without base")?, &pm.splits)?)
             }

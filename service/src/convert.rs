@@ -250,8 +250,20 @@ pub fn split_to_proto(s: &VertexSplit) -> proto::VertexSplit {
 /// Converts a progressive mesh to the contract.
 pub fn progressive_to_proto(pm: &ProgressiveMesh) -> proto::ProgressiveMesh {
     proto::ProgressiveMesh {
-        base: Some(mesh_to_proto(pm.base())),
+        base: Some(pm_base_to_proto(pm)),
         splits: pm.splits().iter().map(split_to_proto).collect(),
+        file: if pm.has_attributes() { meshlod_engine::pm_format::encode(pm) } else { Vec::new() },
+    }
+}
+
+/// A progressive mesh's base as the contract has it: positions and faces only, so that the
+/// splits' vertex numbers stay its own (attributes would split seam vertices).
+pub fn pm_base_to_proto(pm: &ProgressiveMesh) -> proto::Mesh {
+    let base = pm.base();
+    proto::Mesh {
+        positions: base.positions.iter().flatten().copied().collect(),
+        indices: base.triangles.iter().flatten().copied().collect(),
+        ..Default::default()
     }
 }
 

@@ -110,10 +110,10 @@ impl MeshLodService {
             let mut options = request.options.unwrap_or_default();
             options.return_progressive |= progressive;
             let mut run = jobs::simplify(&mesh, &options, predictor.as_deref(), Some(cancel))?;
-            // The engine's progressive mesh carries the attributes (and a `.pm` file does); the
-            // contract's ProgressiveMesh does not yet.
-            if options.return_progressive {
-                run.stats.warnings.extend(jobs::dropped_attributes(&mesh, "the contract's ProgressiveMesh"));
+            // The streamed splits have positions only (the unary ProgressiveMesh carries a `.pm`
+            // file with the attributes).
+            if progressive {
+                run.stats.warnings.extend(jobs::dropped_attributes(&mesh, "SimplifyStream"));
             }
             run.encoded = convert::encode_mesh(&run.result.mesh, format)?;
             Ok(run)
@@ -168,7 +168,7 @@ impl MeshLod for MeshLodService {
         tokio::spawn(async move {
             use proto::simplify_stream_message::Item;
             let send = |item| proto::SimplifyStreamMessage { item: Some(item) };
-            if tx.send(Ok(send(Item::Base(mesh_to_proto(pm.base()))))).await.is_err() {
+            if tx.send(Ok(send(Item::Base(convert::pm_base_to_proto(&pm))))).await.is_err() {
                 return;
             }
             for (i, chunk) in pm.splits().chunks(per_batch).enumerate() {
