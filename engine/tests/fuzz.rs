@@ -156,7 +156,7 @@ fn readers_survive_mutated_files() {
         let mut input = mutate(bytes, &mut rng);
         let ext = path.extension().and_then(|e| e.to_str()).unwrap_or_default();
         if ext == "pm" {
-            if rng.next_u64() % 2 == 0 {
+            if rng.next_u64().is_multiple_of(2) {
                 fix_checksum(&mut input);
             }
             let result = no_panic("pm decode", seed, case, &input, || decode(&input, Path::new("fuzz.pm")));
