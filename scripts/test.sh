@@ -41,17 +41,20 @@ validate() { node tools/gltf-validate/validate.js "$@"; }
 "$MESHLOD" convert "$gltf_out/torus.obj" "$gltf_out/torus.glb"
 "$MESHLOD" simplify "$gltf_out/torus.obj" -o "$gltf_out/torus-10.gltf" --ratio 0.9 > /dev/null
 validate "$gltf_out/torus.glb" "$gltf_out/torus-10.gltf"
-# Every textured asset and spot, simplified to 10% as GLB: 0 errors of their own (an error the
-# input has too, such as an image missing from its folder, is reported as inherited).
+# Every textured asset and spot, simplified to 10% as GLB, and its progressive mesh refined back to
+# the input as GLB: 0 errors of their own (an error the input has too, such as an image missing from
+# its folder, is reported as inherited).
 if [ -d "$MESHLOD_TEXTURED" ] && [ -f "$MESHLOD_MESHES/spot.obj" ]; then
   for input in "$MESHLOD_TEXTURED"/*/*.gltf "$MESHLOD_TEXTURED"/*/*.glb "$MESHLOD_TEXTURED"/*/*.obj \
     "$MESHLOD_MESHES/spot.obj"; do
     [ -f "$input" ] || continue
     name=$(basename "${input%.*}")
-    "$MESHLOD" simplify "$input" -o "$gltf_out/$name-10.glb" --ratio 0.9 > /dev/null
+    "$MESHLOD" simplify "$input" -o "$gltf_out/$name-10.glb" --ratio 0.9 --pm "$gltf_out/$name.pm" > /dev/null
+    # The finest level rebuilt from the progressive mesh, with its attributes and materials.
+    "$MESHLOD" lod "$gltf_out/$name.pm" --vertices 100000000 -o "$gltf_out/$name-full.glb" > /dev/null
     case "$input" in
-      *.gltf | *.glb) validate --input "$input" "$gltf_out/$name-10.glb" ;;
-      *) validate "$gltf_out/$name-10.glb" ;;
+      *.gltf | *.glb) validate --input "$input" "$gltf_out/$name-10.glb" "$gltf_out/$name-full.glb" ;;
+      *) validate "$gltf_out/$name-10.glb" "$gltf_out/$name-full.glb" ;;
     esac
   done
 elif [ -n "${CI:-}" ]; then

@@ -360,7 +360,7 @@ async fn encoded_glb_is_read_and_its_attributes_kept() {
     assert_eq!(file.levels(), rebuilt.levels());
     let finest = file.at_level(file.levels());
     assert_eq!(finest.face_count(), 4);
-    assert_eq!(finest.corners.names(), ["uv"]);
+    assert_eq!(finest.corners.names(), ["uv", "material"]);
     // A GLB whose buffer lives in another file cannot be read from a request.
     let gltf =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../engine/tests/fuzz-corpus/quad-nodes.gltf"))

@@ -6,7 +6,7 @@ use std::path::Path;
 use std::collections::HashMap;
 
 use crate::error::MeshError;
-use crate::mesh::{CornerAttributes, Mesh};
+use crate::mesh::{CornerAttributes, Image, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL};
 use crate::pm::{NO_VERTEX, PmAttributes, ProgressiveMesh, SplitAttributes, StreamedSplit};
 
 /// First four bytes of a `.pm` file.
@@ -20,6 +20,10 @@ const ATTRIBUTE_NORMAL: u8 = 1;
 const ATTRIBUTE_UV: u8 = 2;
 const ATTRIBUTE_COLOR: u8 = 4;
 const ATTRIBUTE_UV_ORIGIN_TOP: u8 = 8;
+const ATTRIBUTE_MATERIAL: u8 = 16;
+/// Header flag: the materials, textures and images the material numbers refer to follow the
+/// attribute section, as JSON (version 2).
+const HAS_MATERIALS: u16 = 2;
 const HEADER_SIZE: usize = 24;
 const CHECKSUM_SIZE: usize = 8;
 /// Fewest bytes a split takes: flags, a one-byte vs, a position, the error.
@@ -61,10 +65,13 @@ pub fn encode(pm: &ProgressiveMesh) -> Vec<u8> {
     let base = pm.base();
     let mut out = Vec::with_capacity(HEADER_SIZE + 24 * base.face_count() + 26 * pm.levels() + CHECKSUM_SIZE);
     out.extend_from_slice(&MAGIC);
-    let attributes = pm
-        .attributes()
-        .filter(|a| !(a.values.normals.is_none() && a.values.uvs.is_none() && a.values.colors.is_none()));
-    let (version, flags) = if attributes.is_some() { (2u16, HAS_ATTRIBUTES) } else { (1, 0) };
+    let attributes = pm.attributes().filter(|a| !a.values.is_empty());
+    let library = attributes.and_then(|a| a.values.library.as_deref().filter(|_| a.values.materials.is_some()));
+    let (version, flags) = match (attributes, library) {
+        (None, _) => (1u16, 0),
+        (Some(_), None) => (2, HAS_ATTRIBUTES),
+        (Some(_), Some(_)) => (2, HAS_ATTRIBUTES | HAS_MATERIALS),
+    };
     out.extend_from_slice(&version.to_le_bytes());
     out.extend_from_slice(&flags.to_le_bytes());
     out.extend_from_slice(&(base.vertex_count() as u32).to_le_bytes());
@@ -99,6 +106,11 @@ pub fn encode(pm: &ProgressiveMesh) -> Vec<u8> {
     if let Some(a) = attributes {
         encode_attributes(&mut out, pm, a);
     }
+    if let Some(library) = library {
+        let text = canonical(library_to_json(library)).to_string();
+        put_varint(&mut out, text.len() as u64);
+        out.extend_from_slice(text.as_bytes());
+    }
     let checksum = fnv1a(&out);
     out.extend_from_slice(&checksum.to_le_bytes());
     out
@@ -112,13 +124,16 @@ fn encode_attributes(out: &mut Vec<u8>, pm: &ProgressiveMesh, a: &PmAttributes) 
     let mask = if v.normals.is_some() { ATTRIBUTE_NORMAL } else { 0 }
         | if v.uvs.is_some() { ATTRIBUTE_UV } else { 0 }
         | if v.colors.is_some() { ATTRIBUTE_COLOR } else { 0 }
-        | if v.uv_origin_top { ATTRIBUTE_UV_ORIGIN_TOP } else { 0 };
-    let floats = |k: u32| -> Vec<f32> {
+        | if v.uv_origin_top { ATTRIBUTE_UV_ORIGIN_TOP } else { 0 }
+        | if v.materials.is_some() { ATTRIBUTE_MATERIAL } else { 0 };
+    // A value as the 4-byte words it is written as: floats, then the material number.
+    let floats = |k: u32| -> Vec<u32> {
         let k = k as usize;
-        let mut f = Vec::with_capacity(9);
-        f.extend(v.normals.iter().flat_map(|n| n[k]));
-        f.extend(v.uvs.iter().flat_map(|u| u[k]));
-        f.extend(v.colors.iter().flat_map(|c| c[k]));
+        let mut f = Vec::with_capacity(10);
+        f.extend(v.normals.iter().flat_map(|n| n[k].map(f32::to_bits)));
+        f.extend(v.uvs.iter().flat_map(|u| u[k].map(f32::to_bits)));
+        f.extend(v.colors.iter().flat_map(|c| c[k].map(f32::to_bits)));
+        f.extend(v.materials.iter().map(|m| m[k]));
         f
     };
     // Every index in the order it is written, renumbered to distinct values in order of first use.
@@ -128,12 +143,12 @@ fn encode_attributes(out: &mut Vec<u8>, pm: &ProgressiveMesh, a: &PmAttributes) 
         ids.extend(s.moved.iter().map(|m| m.1));
     }
     let mut number: HashMap<Vec<u32>, u32> = HashMap::new();
-    let mut values: Vec<Vec<f32>> = Vec::new();
+    let mut values: Vec<Vec<u32>> = Vec::new();
     let renumbered: Vec<u32> = ids
         .iter()
         .map(|&k| {
             let value = floats(k);
-            *number.entry(value.iter().map(|x| x.to_bits()).collect()).or_insert_with(|| {
+            *number.entry(value.clone()).or_insert_with(|| {
                 values.push(value);
                 values.len() as u32 - 1
             })
@@ -142,7 +157,9 @@ fn encode_attributes(out: &mut Vec<u8>, pm: &ProgressiveMesh, a: &PmAttributes) 
     out.push(mask);
     put_varint(out, values.len() as u64);
     for value in &values {
-        put_f32s(out, value);
+        for word in value {
+            out.extend_from_slice(&word.to_le_bytes());
+        }
     }
     let mut next = renumbered.iter();
     let mut id = || *next.next().expect("one renumbered index per index");
@@ -164,14 +181,15 @@ fn encode_attributes(out: &mut Vec<u8>, pm: &ProgressiveMesh, a: &PmAttributes) 
 /// Reads the attribute section written by [`encode_attributes`].
 fn decode_attributes(r: &mut Reader, base_faces: usize, added: &[usize]) -> Result<PmAttributes, MeshError> {
     let mask = r.take(1)?[0];
-    if mask & !(ATTRIBUTE_NORMAL | ATTRIBUTE_UV | ATTRIBUTE_COLOR | ATTRIBUTE_UV_ORIGIN_TOP) != 0
-        || mask & (ATTRIBUTE_NORMAL | ATTRIBUTE_UV | ATTRIBUTE_COLOR) == 0
+    if mask & !(ATTRIBUTE_NORMAL | ATTRIBUTE_UV | ATTRIBUTE_COLOR | ATTRIBUTE_UV_ORIGIN_TOP | ATTRIBUTE_MATERIAL) != 0
+        || mask & (ATTRIBUTE_NORMAL | ATTRIBUTE_UV | ATTRIBUTE_COLOR | ATTRIBUTE_MATERIAL) == 0
     {
         return Err(r.error(format!("invalid attribute mask {mask:#04x}")));
     }
     let width = 3 * (mask & ATTRIBUTE_NORMAL != 0) as usize
         + 2 * (mask & ATTRIBUTE_UV != 0) as usize
-        + 4 * (mask & ATTRIBUTE_COLOR != 0) as usize;
+        + 4 * (mask & ATTRIBUTE_COLOR != 0) as usize
+        + (mask & ATTRIBUTE_MATERIAL != 0) as usize;
     let count = r.varint()?;
     // Each value takes 4 bytes per float: a count the remaining bytes cannot hold is refused
     // before anything is allocated from it.
@@ -183,7 +201,8 @@ fn decode_attributes(r: &mut Reader, base_faces: usize, added: &[usize]) -> Resu
         uvs: (mask & ATTRIBUTE_UV != 0).then(Vec::new),
         colors: (mask & ATTRIBUTE_COLOR != 0).then(Vec::new),
         uv_origin_top: mask & ATTRIBUTE_UV_ORIGIN_TOP != 0,
-        ..Default::default()
+        materials: (mask & ATTRIBUTE_MATERIAL != 0).then(Vec::new),
+        library: None,
     };
     for _ in 0..count {
         if let Some(n) = &mut values.normals {
@@ -194,6 +213,9 @@ fn decode_attributes(r: &mut Reader, base_faces: usize, added: &[usize]) -> Resu
         }
         if let Some(c) = &mut values.colors {
             c.push([r.f32()?, r.f32()?, r.f32()?, r.f32()?]);
+        }
+        if let Some(m) = &mut values.materials {
+            m.push(r.u32()?);
         }
     }
     let index = |r: &mut Reader| -> Result<u32, MeshError> {
@@ -225,6 +247,88 @@ fn decode_attributes(r: &mut Reader, base_faces: usize, added: &[usize]) -> Resu
         splits.push(SplitAttributes { new_faces, moved });
     }
     Ok(PmAttributes { values, base, splits })
+}
+
+/// The materials, textures, samplers and images as the `.pm` file keeps them: glTF's JSON, and for
+/// each image its bytes (base64), its file or its URI.
+fn library_to_json(library: &MaterialLibrary) -> serde_json::Value {
+    use base64::Engine as _;
+    let images: Vec<serde_json::Value> = library
+        .images
+        .iter()
+        .map(|image| {
+            let mut entry = serde_json::json!({ "json": image.json, "mime_type": image.mime_type });
+            // A file's bytes travel inside (the `.pm` then draws anywhere, and its bytes do not
+            // depend on where the input was); a file that cannot be read keeps its name as a URI.
+            let bytes = match &image.source {
+                ImageSource::Bytes(bytes) => Some(bytes.clone()),
+                ImageSource::File(path) => std::fs::read(path).ok(),
+                ImageSource::Uri(_) => None,
+            };
+            match (&image.source, bytes) {
+                (_, Some(bytes)) => {
+                    entry["bytes"] = base64::engine::general_purpose::STANDARD.encode(bytes).into();
+                }
+                (ImageSource::File(path), None) => {
+                    let name = path.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+                    entry["uri"] = name.replace(' ', "%20").into();
+                }
+                (ImageSource::Uri(uri), None) => entry["uri"] = uri.clone().into(),
+                (ImageSource::Bytes(_), None) => unreachable!("bytes are bytes"),
+            }
+            entry
+        })
+        .collect();
+    serde_json::json!({
+        "materials": library.materials,
+        "textures": library.textures,
+        "samplers": library.samplers,
+        "images": images,
+        "extensions_used": library.extensions_used,
+        "extensions_required": library.extensions_required,
+        "not_carried": library.not_carried,
+    })
+}
+
+/// `value` with every object's keys in sorted order, so that the bytes written do not depend on
+/// whether serde_json keeps insertion order (a feature another crate of the build may turn on).
+fn canonical(value: serde_json::Value) -> serde_json::Value {
+    match value {
+        serde_json::Value::Object(map) => {
+            let mut entries: Vec<(String, serde_json::Value)> = map.into_iter().collect();
+            entries.sort_by(|a, b| a.0.cmp(&b.0));
+            serde_json::Value::Object(entries.into_iter().map(|(k, v)| (k, canonical(v))).collect())
+        }
+        serde_json::Value::Array(items) => serde_json::Value::Array(items.into_iter().map(canonical).collect()),
+        other => other,
+    }
+}
+
+/// Reads [`library_to_json`]'s form back; `None` when it is not that form.
+fn library_from_json(json: &serde_json::Value) -> Option<MaterialLibrary> {
+    use base64::Engine as _;
+    let array = |key: &str| json.get(key)?.as_array().cloned();
+    let strings =
+        |key: &str| -> Option<Vec<String>> { array(key)?.iter().map(|v| v.as_str().map(str::to_string)).collect() };
+    let mut images = Vec::new();
+    for entry in array("images")? {
+        let source = if let Some(b) = entry.get("bytes").and_then(|b| b.as_str()) {
+            ImageSource::Bytes(base64::engine::general_purpose::STANDARD.decode(b).ok()?)
+        } else {
+            ImageSource::Uri(entry.get("uri")?.as_str()?.to_string())
+        };
+        let mime_type = entry.get("mime_type").and_then(|m| m.as_str()).map(str::to_string);
+        images.push(Image { json: entry.get("json")?.clone(), source, mime_type });
+    }
+    Some(MaterialLibrary {
+        materials: array("materials")?,
+        textures: array("textures")?,
+        samplers: array("samplers")?,
+        images,
+        extensions_used: strings("extensions_used")?,
+        extensions_required: strings("extensions_required")?,
+        not_carried: strings("not_carried")?,
+    })
 }
 
 /// Writes a `.pm` file.
@@ -300,7 +404,10 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<ProgressiveMesh, MeshError> {
         ));
     }
     let flags = u16::from_le_bytes(r.take(2)?.try_into().expect("2 bytes"));
-    if flags & !HAS_ATTRIBUTES != 0 || (version == 1 && flags != 0) {
+    if flags & !(HAS_ATTRIBUTES | HAS_MATERIALS) != 0
+        || (version == 1 && flags != 0)
+        || (flags & HAS_MATERIALS != 0 && flags & HAS_ATTRIBUTES == 0)
+    {
         return Err(MeshError::parse(path, "byte 6", format!("unknown flags {flags:#06x} for version {version}")));
     }
     let (payload, stored) = bytes.split_at(bytes.len() - CHECKSUM_SIZE);
@@ -368,13 +475,31 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<ProgressiveMesh, MeshError> {
         let error = r.f32()?;
         splits.push(StreamedSplit { vs: vs as u32, vl, vr, new_position, split_position, error });
     }
-    let attributes = if flags & HAS_ATTRIBUTES != 0 {
+    let mut attributes = if flags & HAS_ATTRIBUTES != 0 {
         let added: Vec<usize> =
             splits.iter().map(|s| (s.vl != NO_VERTEX) as usize + (s.vr != NO_VERTEX) as usize).collect();
         Some(decode_attributes(&mut r, face_count, &added)?)
     } else {
         None
     };
+    if let Some(a) = &mut attributes
+        && flags & HAS_MATERIALS != 0
+    {
+        let length = r.varint()?;
+        if length > (r.bytes.len() - r.offset) as u64 {
+            return Err(r.error(format!("a materials section of {length} bytes does not fit in the file")));
+        }
+        let text = r.take(length as usize)?;
+        let library = serde_json::from_slice(text)
+            .ok()
+            .and_then(|json| library_from_json(&json))
+            .ok_or_else(|| r.error("the materials section is not valid"))?;
+        let known = library.materials.len() as u32;
+        if let Some(&m) = a.values.materials.iter().flatten().find(|&&m| m != NO_MATERIAL && m >= known) {
+            return Err(r.error(format!("material {m} out of range ({known} materials)")));
+        }
+        a.values.library = Some(std::sync::Arc::new(library));
+    }
     if r.offset != r_bytes.len() {
         return Err(r.error(format!("{} unexpected bytes after the last section", r_bytes.len() - r.offset)));
     }

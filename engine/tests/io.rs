@@ -800,18 +800,31 @@ fn progressive_meshes_carry_attributes_exactly() {
             }
         }
         assert!(face_multiset(&cursor.mesh()) == face_multiset(pm.base()), "{name}: back down, not the base");
-        // Through a `.pm` file (version 2): the same levels, materials aside (not written).
+        // Through a `.pm` file (version 2): the same levels, materials and their library included.
         let bytes = meshlod_engine::pm_format::encode(pm);
         assert_eq!(u16::from_le_bytes([bytes[4], bytes[5]]), 2, "{name}: attributes make a version 2 file");
         let back = meshlod_engine::pm_format::decode(&bytes, Path::new("back.pm")).unwrap();
-        let strip = |m: &Mesh| {
-            let mut m = m.clone();
-            (m.corners.materials, m.corners.library) = (None, None);
-            m
-        };
-        assert!(face_multiset(back.base()) == face_multiset(&strip(&out.mesh)), "{name}: base through the file");
+        assert!(face_multiset(back.base()) == face_multiset(&out.mesh), "{name}: base through the file");
         let finest = back.at_level(back.levels());
-        assert!(face_multiset(&finest) == face_multiset(&strip(&mesh)), "{name}: the input through the file");
+        assert!(face_multiset(&finest) == face_multiset(&mesh), "{name}: the input through the file");
+        // The library comes back with every image it could read inside it.
+        if let (Some(before), Some(after)) = (&mesh.corners.library, &finest.corners.library) {
+            use meshlod_engine::mesh::ImageSource;
+            assert!(before.materials == after.materials && before.textures == after.textures, "{name}");
+            assert_eq!(before.images.len(), after.images.len(), "{name}");
+            for (b, a) in before.images.iter().zip(&after.images) {
+                let expected = match &b.source {
+                    ImageSource::File(path) => std::fs::read(path).ok().map(ImageSource::Bytes),
+                    other => Some(other.clone()),
+                };
+                match expected {
+                    Some(e) => assert!(a.source == e, "{name}: an image changed through the file"),
+                    None => assert!(matches!(a.source, ImageSource::Uri(_)), "{name}: a missing image kept by name"),
+                }
+            }
+        } else {
+            assert_eq!(mesh.corners.library.is_some(), finest.corners.library.is_some(), "{name}");
+        }
         // A file cut anywhere in its attribute section is refused, never half read.
         for cut in [bytes.len() - 9, bytes.len() - 40, bytes.len() / 2] {
             assert!(meshlod_engine::pm_format::decode(&bytes[..cut], Path::new("cut.pm")).is_err(), "{name}: {cut}");
