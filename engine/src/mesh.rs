@@ -205,7 +205,18 @@ impl CornerAttributes {
     /// its output vertex. Without attributes the vertices stay as they are (every vertex, used or
     /// not; `source` then holds vertex indices, marked by [`Wedges::identity`]).
     pub fn wedges(&self, triangles: &[[u32; 3]], vertex_count: usize) -> Wedges {
-        if self.is_empty() {
+        self.split_vertices(triangles, vertex_count, true)
+    }
+
+    /// [`CornerAttributes::wedges`] for a format without materials (PLY, the contract's `Mesh`):
+    /// vertices split by their values only.
+    pub fn value_wedges(&self, triangles: &[[u32; 3]], vertex_count: usize) -> Wedges {
+        self.split_vertices(triangles, vertex_count, false)
+    }
+
+    fn split_vertices(&self, triangles: &[[u32; 3]], vertex_count: usize, by_material: bool) -> Wedges {
+        let materials = self.materials.as_ref().filter(|_| by_material);
+        if self.uvs.is_none() && self.normals.is_none() && self.colors.is_none() && materials.is_none() {
             return Wedges {
                 source: (0..vertex_count).collect(),
                 corner_vertex: triangles.iter().flatten().copied().collect(),
@@ -217,7 +228,7 @@ impl CornerAttributes {
             bits.extend(self.normals.iter().flat_map(|n| n[k].map(f32::to_bits)));
             bits.extend(self.uvs.iter().flat_map(|u| u[k].map(f32::to_bits)));
             bits.extend(self.colors.iter().flat_map(|c| c[k].map(f32::to_bits)));
-            bits.extend(self.materials.iter().map(|m| m[k]));
+            bits.extend(materials.map(|m| m[k]));
             bits
         };
         let mut seen: std::collections::HashMap<(u32, Vec<u32>), u32> = std::collections::HashMap::new();

@@ -392,8 +392,7 @@ impl ProgressiveMesh {
             return Err(bad("base attributes".into(), format!("value {k} out of range ({count} values)")));
         }
         for (j, (split, a)) in self.splits.iter().zip(&attributes.splits).enumerate() {
-            let added = split.added_faces();
-            if let Some(k) = out_of_range(attributes.splits[j].new_faces[..added].as_flattened()) {
+            if let Some(k) = out_of_range(a.new_faces[..split.added_faces()].as_flattened()) {
                 return Err(bad(format!("split {j} attributes"), format!("value {k} out of range ({count} values)")));
             }
             let faces = self.face_counts[j];

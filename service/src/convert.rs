@@ -208,21 +208,16 @@ pub fn encode_mesh(mesh: &Mesh, format: Option<proto::MeshFormat>) -> Result<Opt
 /// Converts an engine mesh to the contract: attributes per vertex, a vertex whose corners differ
 /// (a seam) once per distinct value.
 pub fn mesh_to_proto(mesh: &Mesh) -> proto::Mesh {
-    // The contract has no materials: vertices are split by their values only.
-    let unmaterialed;
-    let mut c = &mesh.corners;
-    if c.materials.is_some() {
-        unmaterialed = meshlod_engine::mesh::CornerAttributes { materials: None, library: None, ..c.clone() };
-        c = &unmaterialed;
-    }
-    if c.is_empty() {
+    let c = &mesh.corners;
+    if c.uvs.is_none() && c.normals.is_none() && c.colors.is_none() {
         return proto::Mesh {
             positions: mesh.positions.iter().flatten().copied().collect(),
             indices: mesh.triangles.iter().flatten().copied().collect(),
             ..Default::default()
         };
     }
-    let wedges = c.wedges(&mesh.triangles, mesh.vertex_count());
+    // The contract has no materials: vertices are split by their values only.
+    let wedges = c.value_wedges(&mesh.triangles, mesh.vertex_count());
     fn flat<const N: usize>(values: &Option<Vec<[f32; N]>>, source: &[usize]) -> Vec<f32> {
         values.as_ref().map_or_else(Vec::new, |v| source.iter().flat_map(|&k| v[k]).collect())
     }

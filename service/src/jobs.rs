@@ -53,14 +53,11 @@ pub fn simplify_warnings(o: &proto::SimplifyOptions) -> Vec<String> {
     out
 }
 
-/// The warning for an input whose attributes `operation` does not carry yet.
-pub fn dropped_attributes(mesh: &Mesh, operation: &str) -> Option<String> {
-    let names = mesh.corners.names();
-    (!names.is_empty()).then(|| {
-        format!(
-            "the input's attributes ({}) are not kept: {operation} does not carry attributes yet, the result has positions only",
-            names.join(", ")
-        )
+/// The warning for the input's attributes that `operation`'s result (which has `kept`) lost.
+pub fn lost_attributes(mesh: &Mesh, kept: &[&str], operation: &str) -> Option<String> {
+    let lost: Vec<&str> = mesh.corners.names().into_iter().filter(|n| !kept.contains(n)).collect();
+    (!lost.is_empty()).then(|| {
+        format!("the input's attributes ({}) are not kept: {operation} does not carry them yet", lost.join(", "))
     })
 }
 
@@ -227,20 +224,10 @@ pub fn refine(
         rounds: s.rounds,
         etc_source: etc_source.into(),
         model_version,
-        warnings: {
-            let kept = result.mesh.corners.names();
-            let lost: Vec<&str> = mesh.corners.names().into_iter().filter(|n| !kept.contains(n)).collect();
-            (!lost.is_empty())
-                .then(|| {
-                    format!(
-                        "the input's attributes ({}) are not kept: refine's triangle collapse (modes simplify and both) does not carry attributes yet, the result has positions only",
-                        lost.join(", ")
-                    )
-                })
-                .into_iter()
-                .chain(mesh.corners.not_carried_warning())
-                .collect()
-        },
+        warnings: lost_attributes(mesh, &result.mesh.corners.names(), "refinement")
+            .into_iter()
+            .chain(mesh.corners.not_carried_warning())
+            .collect(),
     };
     Ok((result, stats))
 }

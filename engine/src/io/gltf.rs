@@ -89,12 +89,8 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
                 gltf.blob.clone().ok_or_else(|| err(&at, "refers to the GLB binary chunk, which is missing".into()))?
             }
             gltf::buffer::Source::Uri(uri) => {
-                if let Some(rest) = uri.strip_prefix("data:") {
-                    let (_, payload) =
-                        rest.split_once(";base64,").ok_or_else(|| err(&at, "data URI is not base64".into()))?;
-                    base64::engine::general_purpose::STANDARD
-                        .decode(payload)
-                        .map_err(|e| err(&at, format!("data URI: {e}")))?
+                if let Some(decoded) = data_uri(uri) {
+                    decoded.map_err(|reason| err(&at, reason))?.1
                 } else {
                     let folder = folder.ok_or_else(|| {
                         err(
@@ -210,12 +206,8 @@ fn library(
                 (ImageSource::Bytes(bytes), Some(mime_type.to_string()))
             }
             gltf::image::Source::Uri { uri, .. } => {
-                if let Some(rest) = uri.strip_prefix("data:") {
-                    let (kind, payload) =
-                        rest.split_once(";base64,").ok_or_else(|| (at.clone(), "data URI is not base64".into()))?;
-                    let bytes = base64::engine::general_purpose::STANDARD
-                        .decode(payload)
-                        .map_err(|e| (at.clone(), format!("data URI: {e}")))?;
+                if let Some(decoded) = data_uri(uri) {
+                    let (kind, bytes) = decoded.map_err(|reason| (at.clone(), reason))?;
                     (ImageSource::Bytes(bytes), Some(kind.to_string()).filter(|k| !k.is_empty()).or(mime_type))
                 } else if let Some(folder) = folder {
                     (ImageSource::File(folder.join(uri.replace("%20", " "))), mime_type)
@@ -285,6 +277,15 @@ fn collect_extensions(value: &serde_json::Value, out: &mut Vec<String>) {
         serde_json::Value::Array(items) => items.iter().for_each(|v| collect_extensions(v, out)),
         _ => {}
     }
+}
+
+/// A `data:` URI's media type and decoded bytes; `None` for any other URI.
+fn data_uri(uri: &str) -> Option<Result<(&str, Vec<u8>), String>> {
+    let rest = uri.strip_prefix("data:")?;
+    Some(rest.split_once(";base64,").ok_or_else(|| "data URI is not base64".to_string()).and_then(|(kind, payload)| {
+        let bytes = base64::engine::general_purpose::STANDARD.decode(payload).map_err(|e| format!("data URI: {e}"))?;
+        Ok((kind, bytes))
+    }))
 }
 
 /// Whether a primitive mode describes a surface.

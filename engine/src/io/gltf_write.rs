@@ -101,12 +101,14 @@ pub fn write_gltf(mut out: impl Write, mesh: &Mesh, binary: bool, folder: Option
     // One primitive per material, in the order materials first appear; indices in one view.
     let material_of = |f: usize| corners.materials.as_ref().map_or(NO_MATERIAL, |m| m[3 * f]);
     let mut groups: Vec<(u32, Vec<usize>)> = Vec::new();
+    let mut group_of: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
     for f in 0..mesh.face_count() {
         let m = material_of(f);
-        match groups.iter_mut().find(|(g, _)| *g == m) {
-            Some((_, faces)) => faces.push(f),
-            None => groups.push((m, vec![f])),
-        }
+        let g = *group_of.entry(m).or_insert_with(|| {
+            groups.push((m, Vec::new()));
+            groups.len() - 1
+        });
+        groups[g].1.push(f);
     }
     // 0xFFFF is a primitive-restart value for 16-bit indices: 32-bit from there.
     let wide = count >= 0xFFFF;

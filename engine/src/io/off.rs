@@ -8,10 +8,8 @@
 
 use std::path::Path;
 
-use glam::DVec3;
-
 use super::ReadLimits;
-use super::triangulate::triangulate_polygon;
+use super::triangulate::triangulate_face;
 use crate::error::MeshError;
 use crate::mesh::Mesh;
 
@@ -143,17 +141,7 @@ pub fn read_off(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
             }
             indices.push(v as u32);
         }
-        local.clear();
-        if corners == 3 {
-            local.push([0, 1, 2]);
-        } else {
-            points.clear();
-            points.extend(indices.iter().map(|&v| {
-                let p = positions[v as usize];
-                DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
-            }));
-            triangulate_polygon(&points, &mut local);
-        }
+        triangulate_face(indices.iter().map(|&v| positions[v as usize]), &mut points, &mut local);
         triangles.extend(local.iter().map(|t| [indices[t[0]], indices[t[1]], indices[t[2]]]));
         if f % 4096 == 0 {
             limits.check_cancel()?;

@@ -7,10 +7,8 @@
 use std::io::Write;
 use std::path::Path;
 
-use glam::DVec3;
-
 use super::ReadLimits;
-use super::triangulate::triangulate_polygon;
+use super::triangulate::triangulate_face;
 use crate::error::MeshError;
 use crate::mesh::{CornerAttributes, Mesh};
 
@@ -456,17 +454,7 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
         }
         // Checked before triangulating: n corners always make n − 2 triangles.
         limits.check_faces((triangles.len() + indices.len().saturating_sub(2)) as u64)?;
-        local.clear();
-        if indices.len() == 3 {
-            local.push([0, 1, 2]);
-        } else {
-            points.clear();
-            points.extend(indices.iter().map(|&v| {
-                let p = positions[v as usize];
-                DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
-            }));
-            triangulate_polygon(&points, &mut local);
-        }
+        triangulate_face(indices.iter().map(|&v| positions[v as usize]), &mut points, &mut local);
         triangles.extend(local.iter().map(|t| [indices[t[0]] as u32, indices[t[1]] as u32, indices[t[2]] as u32]));
     }
     // Per-vertex values become per-corner values: a PLY vertex has one of each.
@@ -498,13 +486,12 @@ pub fn write_ply(out: &mut impl Write, mesh: &Mesh) -> std::io::Result<()> {
     let c = &mesh.corners;
     // PLY colours are bytes: values that make the same bytes make one vertex.
     let mut quantised = c.clone();
-    // PLY has no materials: a vertex is split by its values only.
-    quantised.materials = None;
     let uvs = c.uvs_with_origin(false);
     if let Some(colors) = &mut quantised.colors {
         colors.iter_mut().for_each(|col| *col = col.map(|x| colour_byte(x) as f32));
     }
-    let wedges = quantised.wedges(&mesh.triangles, mesh.vertex_count());
+    // PLY has no materials: a vertex is split by its values only.
+    let wedges = quantised.value_wedges(&mesh.triangles, mesh.vertex_count());
     let (source, corner_vertex) = (&wedges.source, &wedges.corner_vertex);
     let mut header = format!(
         "ply\nformat binary_little_endian 1.0\ncomment written by meshlod\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\n",

@@ -15,6 +15,23 @@ use glam::{DVec2, DVec3};
 /// Point-in-triangle tests and grid cells visited per corner before the rest is fanned.
 pub(crate) const WORK_PER_CORNER: usize = 256;
 
+/// Sets `local` to the triangles (as corner numbers) that cover the face whose corners sit at
+/// `corners`: a triangle as it is, a polygon by [`triangulate_polygon`] (`points` is scratch).
+pub(crate) fn triangulate_face(
+    corners: impl ExactSizeIterator<Item = [f32; 3]>,
+    points: &mut Vec<DVec3>,
+    local: &mut Vec<[usize; 3]>,
+) {
+    local.clear();
+    if corners.len() == 3 {
+        local.push([0, 1, 2]);
+    } else {
+        points.clear();
+        points.extend(corners.map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)));
+        triangulate_polygon(points, local);
+    }
+}
+
 /// Appends triangles (as positions into `points`) that cover the polygon.
 pub(crate) fn triangulate_polygon(points: &[DVec3], out: &mut Vec<[usize; 3]>) {
     let n = points.len();

@@ -113,7 +113,7 @@ impl MeshLodService {
             // The streamed splits have positions only (the unary ProgressiveMesh carries a `.pm`
             // file with the attributes).
             if progressive {
-                run.stats.warnings.extend(jobs::dropped_attributes(&mesh, "SimplifyStream"));
+                run.stats.warnings.extend(jobs::lost_attributes(&mesh, &[], "SimplifyStream"));
             }
             run.encoded = convert::encode_mesh(&run.result.mesh, format)?;
             Ok(run)
