@@ -166,10 +166,21 @@ fn simplify_pm_lod_chain() {
     assert_eq!(report["stop_reason"], "target_reached");
     let faces_in = report["faces_in"].as_u64().unwrap();
     assert!(report["faces_out"].as_u64().unwrap() * 10 <= faces_in + 10);
-    // The progressive mesh rebuilds the original exactly: zero distance at full resolution.
+    // The compact progressive mesh rebuilds the original on its 16-bit grid: every vertex within
+    // half a grid cell (half of 2/65535 paper units per axis, 2.64e-5 across the cell).
     let full = dir.join("full.obj");
     let lod = ok_json(&["lod", s(&pm), "--faces", &faces_in.to_string(), "-o", s(&full), "--json"]);
     assert_eq!(lod["faces"], faces_in);
+    let d = ok_json(&["hausdorff", s(&input), s(&full), "--json"]);
+    let grid_error = d["hausdorff_paper"].as_f64().unwrap();
+    assert!(grid_error > 0.0 && grid_error <= 2.7e-5, "{grid_error}");
+    // The lossless one rebuilds it exactly: zero distance at full resolution.
+    let lossless = dir.join("lossless.pm");
+    let args =
+        ["simplify", s(&input), "-o", s(&out), "--ratio", "0.9", "--pm", s(&lossless), "--pm-lossless", "--json"];
+    let exact = ok_json(&args);
+    assert!(exact["bytes_per_split"].as_f64().unwrap() > 2.0 * report["bytes_per_split"].as_f64().unwrap());
+    ok_json(&["lod", s(&lossless), "--faces", &faces_in.to_string(), "-o", s(&full), "--json"]);
     let d = ok_json(&["hausdorff", s(&input), s(&full), "--json"]);
     assert_eq!(d["hausdorff_paper"], 0.0);
     let mid = dir.join("mid.obj");

@@ -199,6 +199,8 @@ pub struct ProgressiveMesh {
     input_vertex: Option<Vec<u32>>,
     /// Per-corner attributes, when the input had them (built by the simplifier only).
     attributes: Option<PmAttributes>,
+    /// The grids its values lie on, when read from a compact `.pm` file.
+    quantization: Option<crate::pm_format::Quantization>,
 }
 
 impl ProgressiveMesh {
@@ -262,7 +264,7 @@ impl ProgressiveMesh {
         if let Some(attributes) = &attributes {
             base.corners = attributes.values.pick(attributes.base.iter().flatten().map(|&k| k as usize));
         }
-        ProgressiveMesh { base, splits, face_counts, input_vertex: Some(input_vertex), attributes }
+        ProgressiveMesh { base, splits, face_counts, input_vertex: Some(input_vertex), attributes, quantization: None }
     }
 
     /// Assembles a progressive mesh from parts read elsewhere (a file, a stream), checking it by
@@ -274,7 +276,8 @@ impl ProgressiveMesh {
         for s in &splits {
             face_counts.push(face_counts.last().expect("non-empty") + s.added_faces() as u32);
         }
-        let pm = ProgressiveMesh { base, splits, face_counts, input_vertex: None, attributes: None };
+        let pm =
+            ProgressiveMesh { base, splits, face_counts, input_vertex: None, attributes: None, quantization: None };
         let mut cursor = LodCursor::new(&pm);
         cursor.seek_level(pm.splits.len())?;
         Ok(pm)
@@ -378,6 +381,17 @@ impl ProgressiveMesh {
         self.attributes.as_ref()
     }
 
+    /// The grids of the compact `.pm` file it was read from, if it was.
+    pub fn quantization(&self) -> Option<&crate::pm_format::Quantization> {
+        self.quantization.as_ref()
+    }
+
+    /// Records the grids its values lie on (the compact reader does).
+    pub(crate) fn with_quantization(mut self, quantization: crate::pm_format::Quantization) -> ProgressiveMesh {
+        self.quantization = Some(quantization);
+        self
+    }
+
     /// Adds per-corner attributes (read from a file), checked against the splits: every index in
     /// range, every moved face present at its level. The base mesh takes its values.
     pub fn with_attributes(mut self, attributes: PmAttributes) -> Result<ProgressiveMesh, MeshError> {
@@ -409,6 +423,141 @@ impl ProgressiveMesh {
     }
 }
 
+/// The faces of a progressive mesh as splits are applied and undone: each face's vertices and,
+/// per vertex, the faces around it. [`LodCursor`] and the `.pm` codec replay splits with it.
+#[derive(Debug, Clone)]
+pub(crate) struct Fans {
+    pub triangles: Vec<[u32; 3]>,
+    pub vertex_faces: Vec<Vec<u32>>,
+    /// The faces that the last [`Fans::split`] moved from `vs` to `vt`, in walk order.
+    pub moved: Vec<u32>,
+}
+
+impl Fans {
+    /// The base mesh's faces, with room for `total_vertices` and `total_faces`.
+    pub fn new(base: &[[u32; 3]], total_vertices: usize, total_faces: usize) -> Fans {
+        let mut triangles = Vec::with_capacity(total_faces.max(base.len()));
+        triangles.extend_from_slice(base);
+        triangles.resize(total_faces.max(base.len()), [0; 3]);
+        let mut vertex_faces = vec![Vec::new(); total_vertices];
+        for (f, t) in base.iter().enumerate() {
+            for &v in t {
+                vertex_faces[v as usize].push(f as u32);
+            }
+        }
+        Fans { triangles, vertex_faces, moved: Vec::new() }
+    }
+
+    /// Face around `v` whose corners, rotated to start at `v`, satisfy `pred`.
+    fn find_face(&self, v: u32, pred: impl Fn([u32; 3]) -> bool) -> Option<u32> {
+        self.vertex_faces[v as usize].iter().copied().find(|&f| pred(rotate_to(self.triangles[f as usize], v)))
+    }
+
+    /// The distinct vertices that share a face with `v`, in increasing order.
+    pub fn neighbours(&self, v: u32) -> Vec<u32> {
+        let mut ring: Vec<u32> = self.vertex_faces[v as usize]
+            .iter()
+            .flat_map(|&f| self.triangles[f as usize])
+            .filter(|&x| x != v)
+            .collect();
+        ring.sort_unstable();
+        ring.dedup();
+        ring
+    }
+
+    /// Applies a split that adds vertex `vt` (the number of vertices before it) and its faces from
+    /// face number `next_face` on, and fills [`Fans::moved`]. An error says why the split does not
+    /// fit the mesh (the caller names the split).
+    pub fn split(&mut self, s: &VertexSplit, vt: u32, next_face: u32) -> Result<(), String> {
+        let valid = |v: u32| v == NO_VERTEX || v < vt;
+        if s.vs >= vt
+            || !valid(s.vl)
+            || !valid(s.vr)
+            || (s.vl == NO_VERTEX && s.vr == NO_VERTEX)
+            || s.vl == s.vs
+            || s.vr == s.vs
+            || (s.vl == s.vr)
+        {
+            return Err(format!("vertex indices vs {} vl {} vr {} are invalid with {vt} vertices", s.vs, s.vl, s.vr));
+        }
+        let vs = s.vs;
+        let limit = self.vertex_faces[vs as usize].len();
+        self.moved.clear();
+        // Faces from (vs, vr, ·) counter-clockwise to (vs, ·, vl) move to vt; with vr absent the
+        // chain runs clockwise from (vs, ·, vl) to the boundary.
+        // On a boundary edge the chain may be empty (vt was an ear with a single face).
+        if s.vr != NO_VERTEX {
+            let start = self.find_face(vs, |t| t[1] == s.vr);
+            let mut f = match start {
+                Some(f) => f,
+                None if s.vl == NO_VERTEX => NO_VERTEX,
+                None => return Err("no face with edge vs→vr".into()),
+            };
+            while f != NO_VERTEX {
+                self.moved.push(f);
+                let z = rotate_to(self.triangles[f as usize], vs)[2];
+                if s.vl != NO_VERTEX && z == s.vl {
+                    break;
+                }
+                match self.find_face(vs, |t| t[1] == z) {
+                    Some(next) if self.moved.len() < limit => f = next,
+                    None if s.vl == NO_VERTEX => break,
+                    _ => return Err("the fan of vs does not lead from vr to vl".into()),
+                }
+            }
+        } else {
+            let mut f = self.find_face(vs, |t| t[2] == s.vl).unwrap_or(NO_VERTEX);
+            while f != NO_VERTEX {
+                self.moved.push(f);
+                let y = rotate_to(self.triangles[f as usize], vs)[1];
+                match self.find_face(vs, |t| t[2] == y) {
+                    Some(prev) if self.moved.len() < limit => f = prev,
+                    None => break,
+                    _ => return Err("the fan of vs does not end at a boundary".into()),
+                }
+            }
+        }
+        for &f in &self.moved {
+            for corner in self.triangles[f as usize].iter_mut() {
+                if *corner == vs {
+                    *corner = vt;
+                }
+            }
+            self.vertex_faces[vs as usize].retain(|&g| g != f);
+            self.vertex_faces[vt as usize].push(f);
+        }
+        let mut next_face = next_face;
+        for (present, t) in [(s.vl != NO_VERTEX, [vs, vt, s.vl]), (s.vr != NO_VERTEX, [vt, vs, s.vr])] {
+            if present {
+                self.triangles[next_face as usize] = t;
+                for v in t {
+                    self.vertex_faces[v as usize].push(next_face);
+                }
+                next_face += 1;
+            }
+        }
+        Ok(())
+    }
+
+    /// Undoes a split: removes the faces `first..end` it added and renames `vt` back to `vs`.
+    pub fn unsplit(&mut self, vs: u32, vt: u32, first: u32, end: u32) {
+        for f in first..end {
+            for v in self.triangles[f as usize] {
+                self.vertex_faces[v as usize].retain(|&g| g != f);
+            }
+        }
+        let faces = std::mem::take(&mut self.vertex_faces[vt as usize]);
+        for &f in &faces {
+            for corner in self.triangles[f as usize].iter_mut() {
+                if *corner == vt {
+                    *corner = vs;
+                }
+            }
+        }
+        self.vertex_faces[vs as usize].extend(faces);
+    }
+}
+
 /// The mesh at one level of a progressive mesh, moved up (splits) or down (collapses) one step at
 /// a time: going to a nearby level costs only the splits in between.
 #[derive(Debug, Clone)]
@@ -416,9 +565,7 @@ pub struct LodCursor<'p> {
     pm: &'p ProgressiveMesh,
     level: usize,
     positions: Vec<[f32; 3]>,
-    triangles: Vec<[u32; 3]>,
-    vertex_faces: Vec<Vec<u32>>,
-    moved: Vec<u32>,
+    fans: Fans,
     /// With attributes: each face's corners (indices into the values), and the values each split
     /// replaced, as (face, corner, value), to put back when it is undone.
     corners: Vec<[u32; 3]>,
@@ -446,31 +593,13 @@ impl<'p> LodCursor<'p> {
         let mut positions = Vec::with_capacity(total_vertices);
         positions.extend_from_slice(&pm.base.positions);
         positions.resize(total_vertices, [0.0; 3]);
-        let mut triangles = Vec::with_capacity(total_faces);
-        triangles.extend_from_slice(&pm.base.triangles);
-        triangles.resize(total_faces, [0; 3]);
-        let mut vertex_faces = vec![Vec::new(); total_vertices];
-        for (f, t) in pm.base.triangles.iter().enumerate() {
-            for &v in t {
-                vertex_faces[v as usize].push(f as u32);
-            }
-        }
+        let fans = Fans::new(&pm.base.triangles, total_vertices, total_faces);
         let mut corners = Vec::new();
         if let Some(a) = &pm.attributes {
             corners.extend_from_slice(&a.base);
             corners.resize(total_faces, [0; 3]);
         }
-        LodCursor {
-            pm,
-            level: 0,
-            positions,
-            triangles,
-            vertex_faces,
-            moved: Vec::new(),
-            corners,
-            replaced: Vec::new(),
-            replaced_ends: Vec::new(),
-        }
+        LodCursor { pm, level: 0, positions, fans, corners, replaced: Vec::new(), replaced_ends: Vec::new() }
     }
 
     /// Current level.
@@ -496,7 +625,7 @@ impl<'p> LodCursor<'p> {
         };
         Mesh {
             positions: self.positions[..self.vertex_count()].to_vec(),
-            triangles: self.triangles[..self.face_count()].to_vec(),
+            triangles: self.fans.triangles[..self.face_count()].to_vec(),
             corners,
         }
     }
@@ -522,101 +651,27 @@ impl<'p> LodCursor<'p> {
         MeshError::Parse { path: "<progressive mesh>".into(), location: format!("split {}", self.level), reason }
     }
 
-    /// Face around `v` whose corners, rotated to start at `v`, satisfy `pred`.
-    fn find_face(&self, v: u32, pred: impl Fn([u32; 3]) -> bool) -> Option<u32> {
-        self.vertex_faces[v as usize].iter().copied().find(|&f| pred(rotate_to(self.triangles[f as usize], v)))
-    }
-
     /// Applies the next split.
     pub fn refine(&mut self) -> Result<(), MeshError> {
-        let Some(&s) = self.pm.splits.get(self.level) else { return Ok(()) };
+        let Some(s) = self.pm.splits.get(self.level) else { return Ok(()) };
         let vt = self.vertex_count() as u32;
-        let valid = |v: u32| v == NO_VERTEX || v < vt;
-        if s.vs >= vt
-            || !valid(s.vl)
-            || !valid(s.vr)
-            || (s.vl == NO_VERTEX && s.vr == NO_VERTEX)
-            || s.vl == s.vs
-            || s.vr == s.vs
-            || (s.vl == s.vr)
-        {
-            return Err(self.corrupt(format!(
-                "vertex indices vs {} vl {} vr {} are invalid with {vt} vertices",
-                s.vs, s.vl, s.vr
-            )));
-        }
-        let vs = s.vs;
-        let limit = self.vertex_faces[vs as usize].len();
-        self.moved.clear();
-        // Faces from (vs, vr, ·) counter-clockwise to (vs, ·, vl) move to vt; with vr absent the
-        // chain runs clockwise from (vs, ·, vl) to the boundary.
-        // On a boundary edge the chain may be empty (vt was an ear with a single face).
-        if s.vr != NO_VERTEX {
-            let start = self.find_face(vs, |t| t[1] == s.vr);
-            let mut f = match start {
-                Some(f) => f,
-                None if s.vl == NO_VERTEX => NO_VERTEX,
-                None => return Err(self.corrupt("no face with edge vs→vr".into())),
-            };
-            while f != NO_VERTEX {
-                self.moved.push(f);
-                let z = rotate_to(self.triangles[f as usize], vs)[2];
-                if s.vl != NO_VERTEX && z == s.vl {
-                    break;
-                }
-                match self.find_face(vs, |t| t[1] == z) {
-                    Some(next) if self.moved.len() < limit => f = next,
-                    None if s.vl == NO_VERTEX => break,
-                    _ => return Err(self.corrupt("the fan of vs does not lead from vr to vl".into())),
+        let first = self.face_count();
+        self.fans.split(s, vt, first as u32).map_err(|reason| self.corrupt(reason))?;
+        if let Some(a) = self.pm.attributes.as_ref().map(|a| &a.splits[self.level]) {
+            for &f in &self.fans.moved {
+                let k = self.fans.triangles[f as usize].iter().position(|&v| v == vt).expect("moved to vt");
+                // The value the corner had before the collapse that this split undoes.
+                if let Some(&(_, value)) = a.moved.iter().find(|m| m.0 == f) {
+                    self.replaced.push((f, k as u8, self.corners[f as usize][k]));
+                    self.corners[f as usize][k] = value;
                 }
             }
-        } else {
-            let mut f = self.find_face(vs, |t| t[2] == s.vl).unwrap_or(NO_VERTEX);
-            while f != NO_VERTEX {
-                self.moved.push(f);
-                let y = rotate_to(self.triangles[f as usize], vs)[1];
-                match self.find_face(vs, |t| t[2] == y) {
-                    Some(prev) if self.moved.len() < limit => f = prev,
-                    None => break,
-                    _ => return Err(self.corrupt("the fan of vs does not end at a boundary".into())),
-                }
-            }
-        }
-        let attributes = self.pm.attributes.as_ref().map(|a| &a.splits[self.level]);
-        for i in 0..self.moved.len() {
-            let f = self.moved[i];
-            for (k, corner) in self.triangles[f as usize].iter_mut().enumerate() {
-                if *corner == vs {
-                    *corner = vt;
-                    // The value the corner had before the collapse that this split undoes.
-                    if let Some(&(_, value)) = attributes.and_then(|a| a.moved.iter().find(|m| m.0 == f)) {
-                        self.replaced.push((f, k as u8, self.corners[f as usize][k]));
-                        self.corners[f as usize][k] = value;
-                    }
-                }
-            }
-            self.vertex_faces[vs as usize].retain(|&g| g != f);
-            self.vertex_faces[vt as usize].push(f);
-        }
-        if attributes.is_some() {
             self.replaced_ends.push(self.replaced.len());
-        }
-        let mut next_face = self.face_count() as u32;
-        let mut added = 0;
-        for (present, t) in [(s.vl != NO_VERTEX, [vs, vt, s.vl]), (s.vr != NO_VERTEX, [vt, vs, s.vr])] {
-            if present {
-                self.triangles[next_face as usize] = t;
-                for v in t {
-                    self.vertex_faces[v as usize].push(next_face);
-                }
-                if let Some(a) = attributes {
-                    self.corners[next_face as usize] = a.new_faces[added];
-                }
-                next_face += 1;
-                added += 1;
+            for (added, corners) in a.new_faces[..s.added_faces()].iter().enumerate() {
+                self.corners[first + added] = *corners;
             }
         }
-        self.positions[vs as usize] = s.split_position;
+        self.positions[s.vs as usize] = s.split_position;
         self.positions[vt as usize] = s.new_position;
         self.level += 1;
         Ok(())
@@ -630,21 +685,7 @@ impl<'p> LodCursor<'p> {
         self.level -= 1;
         let s = self.pm.splits[self.level];
         let vt = self.vertex_count() as u32;
-        let (first, end) = (self.pm.face_counts[self.level], self.pm.face_counts[self.level + 1]);
-        for f in first..end {
-            for v in self.triangles[f as usize] {
-                self.vertex_faces[v as usize].retain(|&g| g != f);
-            }
-        }
-        let faces = std::mem::take(&mut self.vertex_faces[vt as usize]);
-        for &f in &faces {
-            for corner in self.triangles[f as usize].iter_mut() {
-                if *corner == vt {
-                    *corner = s.vs;
-                }
-            }
-        }
-        self.vertex_faces[s.vs as usize].extend(faces);
+        self.fans.unsplit(s.vs, vt, self.pm.face_counts[self.level], self.pm.face_counts[self.level + 1]);
         self.positions[s.vs as usize] = s.collapsed_position;
         if self.pm.attributes.is_some() {
             self.replaced_ends.pop();

@@ -443,8 +443,17 @@ fn progressive_meshes_carry_attributes_exactly() {
             }
         }
         assert!(face_multiset(&cursor.mesh()) == face_multiset(pm.base()), "{name}: back down, not the base");
-        // Through a `.pm` file (version 2): the same levels, materials and their library included.
-        let bytes = meshlod_engine::pm_format::encode(pm);
+        // Through a compact `.pm` file: the same levels on its grids, at most 28 bytes a split
+        // with texture coordinates and normals (docs/pm-format.md).
+        let per_split = common::assert_compact_round_trip(&name, pm);
+        println!("{name}: {per_split:.1} B per split, attributes {:?}", mesh.corners.names());
+        let names = mesh.corners.names();
+        if names.contains(&"uv") && names.contains(&"normal") && pm.levels() >= 100 {
+            assert!(per_split <= 28.0, "{name}: {per_split:.1} B per split");
+        }
+        // Through a lossless `.pm` file (version 2): the same levels bit for bit, materials and
+        // their library included.
+        let bytes = meshlod_engine::pm_format::encode_lossless(pm);
         assert_eq!(u16::from_le_bytes([bytes[4], bytes[5]]), 2, "{name}: attributes make a version 2 file");
         let back = meshlod_engine::pm_format::decode(&bytes, Path::new("back.pm")).unwrap();
         assert!(face_multiset(back.base()) == face_multiset(&out.mesh), "{name}: base through the file");
@@ -479,7 +488,7 @@ fn progressive_meshes_carry_attributes_exactly() {
         &SimplifyOptions { target_ratio: Some(0.5), record_progressive: true, ..Default::default() },
     )
     .unwrap();
-    let bytes = meshlod_engine::pm_format::encode(plain.progressive.as_ref().unwrap());
+    let bytes = meshlod_engine::pm_format::encode_lossless(plain.progressive.as_ref().unwrap());
     assert_eq!(u16::from_le_bytes([bytes[4], bytes[5]]), 1);
 }
 

@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use meshlod_engine::io::read_mesh;
-use meshlod_engine::pm_format::encode;
+use meshlod_engine::pm_format::encode_lossless;
 use meshlod_engine::refine::{RefineMode, RefineOptions, refine};
 use meshlod_engine::simplify::{BoundaryMode, Metric, NormalUpdate, Placement, SimplifyOptions, simplify};
 use meshlod_engine::{Mesh, procedural};
@@ -46,7 +46,7 @@ fn simplify_digest(mesh: &Mesh, options: &SimplifyOptions) -> String {
     let out = simplify(mesh, &SimplifyOptions { record_progressive: true, ..options.clone() }).unwrap();
     let mut h = Fnv::new();
     h.mesh(&out.mesh);
-    h.bytes(&encode(out.progressive.as_ref().unwrap()));
+    h.bytes(&encode_lossless(out.progressive.as_ref().unwrap()));
     let s = &out.stats;
     format!("{:016x}\tfaces={} collapses={} rejected={}", h.0, s.faces_out, s.collapses, s.rejected)
 }

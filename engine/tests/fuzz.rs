@@ -12,7 +12,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 
 use meshlod_engine::io::{MeshFormat, ReadLimits, read_mesh_bytes};
-use meshlod_engine::pm_format::{decode, encode};
+use meshlod_engine::pm_format::{decode, encode, encode_lossless};
 use meshlod_engine::rng::SplitMix64;
 use meshlod_engine::simplify::{BoundaryMode, Metric, Placement, SimplifyOptions, simplify};
 use meshlod_engine::{Mesh, MeshError};
@@ -33,8 +33,8 @@ fn corpus() -> Vec<(PathBuf, Vec<u8>)> {
         .collect();
     files.sort();
     assert!(files.len() >= 5, "the seed corpus is missing: {}", dir.display());
-    // A version 2 `.pm` (with an attribute section), made here: a sphere whose two halves are two
-    // texture charts, half simplified.
+    // `.pm` files with attributes, made here in the compact (version 3) and lossless (version 2)
+    // forms: a sphere whose two halves are two texture charts, half simplified.
     let mut sphere = meshlod_engine::procedural::icosphere(1);
     let uvs = (0..3 * sphere.face_count())
         .map(|k| {
@@ -52,6 +52,11 @@ fn corpus() -> Vec<(PathBuf, Vec<u8>)> {
     let pm = meshlod_engine::simplify::simplify(&sphere, &options).unwrap().progressive.unwrap();
     assert!(pm.has_attributes() && pm.levels() > 0);
     files.push((dir.join("generated-sphere-uv.pm"), encode(&pm)));
+    files.push((dir.join("generated-sphere-uv-lossless.pm"), encode_lossless(&pm)));
+    // And a compact one without attributes.
+    let plain = meshlod_engine::procedural::icosphere(2);
+    let pm = meshlod_engine::simplify::simplify(&plain, &options).unwrap().progressive.unwrap();
+    files.push((dir.join("generated-sphere.pm"), encode(&pm)));
     files
 }
 
@@ -244,9 +249,11 @@ fn simplify_pm_and_levels_survive_arbitrary_meshes() {
                 out.mesh.check().unwrap();
                 let pm = out.progressive.unwrap();
                 no_panic("pm", seed, case, text.as_bytes(), || {
-                    let bytes = encode(&pm);
-                    let back = decode(&bytes, Path::new("fuzz.pm")).unwrap();
-                    assert_eq!(back.levels(), pm.levels());
+                    for bytes in [encode(&pm), encode_lossless(&pm)] {
+                        let back = decode(&bytes, Path::new("fuzz.pm")).unwrap();
+                        assert_eq!(back.levels(), pm.levels());
+                        back.at_level(back.levels()).check().unwrap();
+                    }
                     for faces in [0, out.stats.faces_out, mesh.face_count()] {
                         pm.at_faces(faces).check().unwrap();
                     }

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use meshlod_engine::io::{MeshFormat, ReadLimits, read_mesh_bytes, write_mesh_to};
-use meshlod_engine::pm_format::{decode, encode};
+use meshlod_engine::pm_format::{decode, encode, encode_lossless};
 use meshlod_engine::refine::{RefineMode, RefineOptions, refine};
 use meshlod_engine::rng::SplitMix64;
 use meshlod_engine::simplify::{SimplifyOptions, simplify};
@@ -78,12 +78,13 @@ fn mutated_files_never_panic_any_reader() {
             .unwrap()
             .progressive
             .unwrap();
-    let bytes = encode(&pm);
-    for _ in 0..1000 {
-        let input = mutate(&bytes, &mut rng);
-        if let Ok(decoded) = decode(&input, Path::new("fuzz.pm")) {
-            // Whatever decodes must also refine without trouble.
-            let _ = decoded.at_level(decoded.levels());
+    for bytes in [encode(&pm), encode_lossless(&pm)] {
+        for _ in 0..1000 {
+            let input = mutate(&bytes, &mut rng);
+            if let Ok(decoded) = decode(&input, Path::new("fuzz.pm")) {
+                // Whatever decodes must also refine without trouble.
+                let _ = decoded.at_level(decoded.levels());
+            }
         }
     }
 }

@@ -8,7 +8,7 @@ use std::sync::atomic::AtomicBool;
 
 use meshlod_engine::io::read_mesh;
 use meshlod_engine::pm::ProgressiveMesh;
-use meshlod_engine::pm_format::{decode, encode};
+use meshlod_engine::pm_format::{decode, encode, encode_lossless};
 use meshlod_engine::simplify::{
     BoundaryMode, Metric, Placement, SimplifyOptions, StopReason, prepare, simplify, simplify_search_w,
 };
@@ -206,7 +206,7 @@ fn pm_file_round_trips_and_refuses_corruption() {
     let mesh = procedural::bumpy_blob(24, 40, 9);
     for placement in [Placement::Endpoint, Placement::Optimal] {
         let pm = simplify(&mesh, &SimplifyOptions { placement, ..options(0.97) }).unwrap().progressive.unwrap();
-        let bytes = encode(&pm);
+        let bytes = encode_lossless(&pm);
         let back = decode(&bytes, Path::new("t.pm")).unwrap();
         assert_eq!(back.base(), pm.base());
         assert_eq!(back.splits(), pm.splits());
@@ -216,15 +216,22 @@ fn pm_file_round_trips_and_refuses_corruption() {
         if placement == Placement::Endpoint {
             assert!(per_split <= 24.0, "endpoint placement: {per_split} bytes per split");
         }
-        // Every truncation is refused, never a panic.
-        for cut in [0, 3, 10, 30, bytes.len() / 2, bytes.len() - 1] {
-            assert!(matches!(decode(&bytes[..cut], Path::new("t.pm")), Err(MeshError::Parse { .. })), "cut {cut}");
-        }
-        // Flipped bits anywhere are caught by the checksum or the structural checks.
-        for at in (0..bytes.len()).step_by(97) {
-            let mut bad = bytes.clone();
-            bad[at] ^= 0x10;
-            assert!(decode(&bad, Path::new("t.pm")).is_err(), "flip at {at}");
+        // The compact form: the same faces at every level (its positions are checked in
+        // tests/pm_compact.rs).
+        let compact = encode(&pm);
+        let back = decode(&compact, Path::new("t.pm")).unwrap();
+        assert_eq!(back.at_level(back.levels()).triangles, pm.at_level(pm.levels()).triangles);
+        for bytes in [bytes, compact] {
+            // Every truncation is refused, never a panic.
+            for cut in [0, 3, 10, 30, bytes.len() / 2, bytes.len() - 1] {
+                assert!(matches!(decode(&bytes[..cut], Path::new("t.pm")), Err(MeshError::Parse { .. })), "cut {cut}");
+            }
+            // Flipped bits anywhere are caught by the checksum or the structural checks.
+            for at in (0..bytes.len()).step_by(97) {
+                let mut bad = bytes.clone();
+                bad[at] ^= 0x10;
+                assert!(decode(&bad, Path::new("t.pm")).is_err(), "flip at {at}");
+            }
         }
     }
 }

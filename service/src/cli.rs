@@ -272,9 +272,14 @@ pub struct SimplifyArgs {
     /// `--guard` alone is weight 1; 0 is off.
     #[arg(long, value_name = "WEIGHT", num_args = 0..=1, default_missing_value = "1")]
     pub guard: Option<f64>,
-    /// Also write the progressive mesh (base + vertex splits) to this .pm file.
+    /// Also write the progressive mesh (base + vertex splits) to this .pm file: the compact form,
+    /// positions and values on 16-bit grids (docs/pm-format.md).
     #[arg(long)]
     pub pm: Option<PathBuf>,
+    /// Write the .pm with every float as it is (format version 1, or 2 with attributes): levels
+    /// bit for bit, about three times the size of the compact form.
+    #[arg(long, requires = "pm")]
+    pub pm_lossless: bool,
     /// Measure the Hausdorff distance between input and output (certified bounds).
     #[arg(long)]
     pub hausdorff: bool,
@@ -320,6 +325,7 @@ impl SimplifyArgs {
             return_progressive: self.pm.is_some(),
             compute_hausdorff: self.hausdorff,
             guard: self.guard,
+            progressive_lossless: self.pm_lossless,
         };
         SimplifyJob { input: self.input.clone(), output: self.output.clone(), options, pm: self.pm.clone() }
     }

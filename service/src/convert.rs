@@ -242,12 +242,18 @@ pub fn split_to_proto(s: &VertexSplit) -> proto::VertexSplit {
     }
 }
 
-/// Converts a progressive mesh to the contract.
-pub fn progressive_to_proto(pm: &ProgressiveMesh) -> proto::ProgressiveMesh {
+/// Converts a progressive mesh to the contract; with attributes, `file` is its `.pm` in the
+/// compact form, or the lossless one if asked.
+pub fn progressive_to_proto(pm: &ProgressiveMesh, lossless: bool) -> proto::ProgressiveMesh {
+    use meshlod_engine::pm_format::{encode, encode_lossless};
     proto::ProgressiveMesh {
         base: Some(pm_base_to_proto(pm)),
         splits: pm.splits().iter().map(split_to_proto).collect(),
-        file: if pm.has_attributes() { meshlod_engine::pm_format::encode(pm) } else { Vec::new() },
+        file: match (pm.has_attributes(), lossless) {
+            (false, _) => Vec::new(),
+            (true, false) => encode(pm),
+            (true, true) => encode_lossless(pm),
+        },
     }
 }
 

@@ -11,7 +11,7 @@ use meshlod_engine::Mesh;
 use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
 use meshlod_engine::io::{output_format, read_mesh, write_mesh};
 use meshlod_engine::pm::ProgressiveMesh;
-use meshlod_engine::pm_format::encode;
+use meshlod_engine::pm_format::{encode, encode_lossless};
 use meshlod_predictor::Predictor;
 
 use crate::proto;
@@ -94,7 +94,7 @@ pub fn finish_simplify(
     let mut report = report::simplify(stats, measured);
     if let Some(path) = &job.pm {
         let pm = progressive.context("the run returned no progressive mesh")?;
-        let bytes = encode(pm);
+        let bytes = if job.options.progressive_lossless { encode_lossless(pm) } else { encode(pm) };
         std::fs::write(path, &bytes).with_context(|| format!("writing {}", path.display()))?;
         report.extend(report::progressive(pm, bytes.len()));
     }

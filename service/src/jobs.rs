@@ -33,6 +33,8 @@ pub struct Simplification {
     pub hausdorff: Option<proto::HausdorffReport>,
     /// The result as a file, when the request asked for one (`output_format`).
     pub encoded: Option<proto::EncodedMesh>,
+    /// Whether the progressive mesh's `.pm` file goes out in the lossless form.
+    pub progressive_lossless: bool,
 }
 
 /// Options that are accepted but change nothing, said back to the caller.
@@ -138,7 +140,7 @@ pub fn simplify(
         },
         boundary: format!("{:?}", options.boundary).to_lowercase(),
     };
-    Ok(Simplification { result, stats, hausdorff, encoded: None })
+    Ok(Simplification { result, stats, hausdorff, encoded: None, progressive_lossless: o.progressive_lossless })
 }
 
 /// The refiner's options from the contract's request (its `input` is not read): the mode

@@ -1,4 +1,5 @@
-//! Helpers shared by the reader and attribute tests.
+//! Helpers shared by the reader, attribute and `.pm` tests (each test crate uses some of them).
+#![allow(dead_code)]
 
 use std::path::Path;
 
@@ -29,4 +30,75 @@ pub fn tempdir(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("meshlod-test-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
+}
+
+/// Writes `pm` in the compact form and checks what comes back: every level has the same faces,
+/// positions within half a grid step, texture coordinates and colours within half theirs, normals
+/// within 0.1° and the same materials; writing it again gives the same bytes; any cut is
+/// refused. Returns the bytes per split, the materials section (with its images) left out.
+pub fn assert_compact_round_trip(name: &str, pm: &meshlod_engine::pm::ProgressiveMesh) -> f64 {
+    use meshlod_engine::pm_format::{decode, encode};
+    let bytes = encode(pm);
+    assert_eq!(u16::from_le_bytes([bytes[4], bytes[5]]), 3, "{name}: the compact form is version 3");
+    let back = decode(&bytes, Path::new("compact.pm")).unwrap_or_else(|e| panic!("{name}: {e}"));
+    assert_eq!(back.levels(), pm.levels(), "{name}");
+    assert_eq!(encode(&back), bytes, "{name}: written again, the same bytes");
+    let q = back.quantization().expect("read from a compact file").clone();
+    // Half a step, plus the rounding of grid values to f32s.
+    let close = |a: f32, b: f32, step: f32| {
+        ((a as f64) - (b as f64)).abs() <= 0.505 * step as f64 + 4.0 * f32::EPSILON as f64 * a.abs().max(b.abs()) as f64
+    };
+    let (mut a_cursor, mut b_cursor) = (pm.cursor(), back.cursor());
+    let levels = pm.levels();
+    for level in [0, 1.min(levels), levels / 3, 2 * levels / 3, levels, levels / 2] {
+        a_cursor.seek_level(level).unwrap();
+        b_cursor.seek_level(level).unwrap();
+        let (a, b) = (a_cursor.mesh(), b_cursor.mesh());
+        assert_eq!(a.triangles, b.triangles, "{name}: level {level} faces");
+        for (p, r) in a.positions.iter().zip(&b.positions) {
+            for k in 0..3 {
+                assert!(close(p[k], r[k], q.positions.step[k]), "{name}: level {level} position {p:?} → {r:?}");
+            }
+        }
+        let (x, y) = (&a.corners, &b.corners);
+        assert_eq!(x.names(), y.names(), "{name}: level {level}");
+        assert_eq!(x.materials, y.materials, "{name}: level {level} materials");
+        assert_eq!(x.uv_origin_top, y.uv_origin_top, "{name}");
+        if let (Some(u), Some(v), Some(g)) = (&x.uvs, &y.uvs, &q.uvs) {
+            for (s, t) in u.iter().zip(v) {
+                assert!(close(s[0], t[0], g.step[0]) && close(s[1], t[1], g.step[1]), "{name}: uv {s:?} → {t:?}");
+            }
+        }
+        if let (Some(c), Some(d), Some(g)) = (&x.colors, &y.colors, &q.colors) {
+            for (s, t) in c.iter().zip(d) {
+                assert!((0..4).all(|k| close(s[k], t[k], g.step[k])), "{name}: colour {s:?} → {t:?}");
+            }
+        }
+        if let (Some(n), Some(m)) = (&x.normals, &y.normals) {
+            for (s, t) in n.iter().zip(m) {
+                let length = (s.iter().map(|c| (*c as f64).powi(2)).sum::<f64>()).sqrt();
+                if length < 1e-6 {
+                    continue;
+                }
+                let dot = s.iter().zip(t).map(|(a, b)| *a as f64 * *b as f64).sum::<f64>() / length;
+                assert!(dot.min(1.0).acos().to_degrees() <= 0.1, "{name}: normal {s:?} → {t:?}");
+            }
+        }
+    }
+    for cut in [bytes.len() - 1, bytes.len() - 9, bytes.len() / 2, 30] {
+        assert!(decode(&bytes[..cut], Path::new("cut.pm")).is_err(), "{name}: cut at {cut} was read");
+    }
+    // The size of the records: the same file without its materials section (images inside).
+    let records = match pm.attributes().filter(|a| a.values.library.is_some()) {
+        Some(a) => {
+            let mut a = a.clone();
+            a.values.library = None;
+            let bare = meshlod_engine::pm::ProgressiveMesh::from_parts(pm.base().clone(), pm.splits().to_vec())
+                .and_then(|p| p.with_attributes(a))
+                .unwrap();
+            encode(&bare).len()
+        }
+        None => bytes.len(),
+    };
+    (records as f64) / (pm.levels().max(1) as f64)
 }

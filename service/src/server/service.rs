@@ -135,7 +135,7 @@ impl MeshLodService {
 fn simplify_response(run: jobs::Simplification) -> proto::SimplifyResponse {
     proto::SimplifyResponse {
         mesh: run.encoded.is_none().then(|| mesh_to_proto(&run.result.mesh)),
-        progressive: run.result.progressive.as_ref().map(progressive_to_proto),
+        progressive: run.result.progressive.as_ref().map(|pm| progressive_to_proto(pm, run.progressive_lossless)),
         stats: Some(run.stats),
         hausdorff: run.hausdorff,
         encoded: run.encoded,

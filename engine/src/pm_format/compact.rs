@@ -1,0 +1,634 @@
+//! The compact `.pm` form (format version 3, docs/pm-format.md): positions and attribute values on
+//! integer grids, each split's vertices as small indices into the fan the reader already has, and
+//! every number delta-coded against what the reader can predict, in adaptive Golomb–Rice codes.
+//!
+//! Writer and reader replay the splits with the same [`Fans`], so every choice a record makes is
+//! among vertices, faces and values that both sides know at that point.
+
+use std::collections::HashMap;
+
+use super::bits::{BitReader, BitWriter, OutOfBits, Rice, width_for};
+use super::grid::{Grid, MAX_BITS, Quantization, from_octahedral, octahedral};
+use super::{
+    ATTRIBUTE_COLOR, ATTRIBUTE_MATERIAL, ATTRIBUTE_NORMAL, ATTRIBUTE_UV, ATTRIBUTE_UV_ORIGIN_TOP, Reader, put_varint,
+};
+use crate::error::MeshError;
+use crate::mesh::{CornerAttributes, Mesh, NO_MATERIAL};
+use crate::pm::{Fans, NO_VERTEX, PmAttributes, ProgressiveMesh, SplitAttributes, StreamedSplit, VertexSplit};
+
+/// A split's error rounded up to 16 bits (sign, exponent and 7 bits of significand, so within
+/// 0.8 % above it): the code keeps the errors' order and never understates one.
+fn error_code(error: f32) -> u64 {
+    if error.is_nan() || error <= 0.0 {
+        return 0;
+    }
+    (((error.to_bits() as u64) + 0xFFFF) >> 16).min(MAX_ERROR_CODE)
+}
+
+/// The largest code of a finite error.
+const MAX_ERROR_CODE: u64 = 0x7F7F;
+
+fn error_value(code: u64) -> f32 {
+    f32::from_bits((code as u32) << 16)
+}
+
+/// How a split's faces change: both added faces, only `(vs, vt, vl)` or only `(vt, vs, vr)`.
+fn case_of(s: &VertexSplit) -> u64 {
+    match (s.vl != NO_VERTEX, s.vr != NO_VERTEX) {
+        (true, true) => 0,
+        (true, false) => 1,
+        _ => 2,
+    }
+}
+
+/// A topology-only split for [`Fans::split`].
+fn topology(vs: u32, vl: u32, vr: u32) -> VertexSplit {
+    VertexSplit {
+        vs,
+        vl,
+        vr,
+        new_position: [0.0; 3],
+        split_position: [0.0; 3],
+        collapsed_position: [0.0; 3],
+        error: 0.0,
+    }
+}
+
+/// The adaptive codes of the geometry stream, one per kind of number.
+#[derive(Default)]
+struct GeometryCodes {
+    new_vertex: [Rice; 3],
+    moved_vertex: [Rice; 3],
+    error: Rice,
+}
+
+/// Writes the positions grid and the geometry stream: base positions and faces, then per split
+/// its case, `vs`, `vl` and `vr` as places in `vs`'s ring, the positions as grid deltas from
+/// where `vs` sits, and the error.
+pub(super) fn encode_geometry(out: &mut Vec<u8>, pm: &ProgressiveMesh, grid: &Grid<3>) {
+    grid.write(out, true);
+    let base = pm.base();
+    let n0 = base.vertex_count();
+    let mut w = BitWriter::default();
+    let mut at: Vec<[i64; 3]> = base.positions.iter().map(|p| grid.quantize(p)).collect();
+    for q in &at {
+        for &c in q {
+            w.put(c as u64, grid.bits as u32);
+        }
+    }
+    for t in &base.triangles {
+        for &v in t {
+            w.put(v as u64, width_for(n0 as u64));
+        }
+    }
+    let total_faces = pm.faces_at_level(pm.levels());
+    let mut fans = Fans::new(&base.triangles, n0 + pm.levels(), total_faces);
+    let mut codes = GeometryCodes::default();
+    let mut previous_error = None;
+    for (j, s) in pm.splits().iter().enumerate() {
+        let vt = (n0 + j) as u32;
+        let from = at[s.vs as usize];
+        let new = grid.quantize(&s.new_position);
+        let moved = grid.quantize(&s.split_position);
+        w.put(case_of(s), 2);
+        w.bit(moved != from);
+        w.put(s.vs as u64, width_for(vt as u64));
+        let ring = fans.neighbours(s.vs);
+        for v in [s.vl, s.vr].into_iter().filter(|&v| v != NO_VERTEX) {
+            match ring.binary_search(&v) {
+                Ok(i) => w.put(i as u64, width_for(ring.len() as u64 + 1)),
+                Err(_) => {
+                    w.put(ring.len() as u64, width_for(ring.len() as u64 + 1));
+                    w.put(v as u64, width_for(vt as u64));
+                }
+            }
+        }
+        for a in 0..3 {
+            codes.new_vertex[a].put_signed(&mut w, new[a] - from[a]);
+        }
+        if moved != from {
+            // With optimal placement vs tends to move the other way from vt, about half as far
+            // (measured: 1-2 % smaller than coding the move as it is).
+            for a in 0..3 {
+                codes.moved_vertex[a].put_signed(&mut w, (moved[a] - from[a]) + (new[a] - from[a]) / 2);
+            }
+        }
+        let code = error_code(s.error);
+        match previous_error {
+            None => w.put(code, 16),
+            Some(p) => codes.error.put_signed(&mut w, p as i64 - code as i64),
+        }
+        previous_error = Some(code);
+        fans.split(s, vt, pm.faces_at_level(j) as u32).expect("a ProgressiveMesh replays");
+        at[s.vs as usize] = moved;
+        at.push(new);
+    }
+    let bytes = w.finish();
+    put_varint(out, bytes.len() as u64);
+    out.extend_from_slice(&bytes);
+}
+
+/// Fewest bits a split record takes: case, moves flag, three one-bit codes, a one-bit error.
+const MIN_SPLIT_BITS: u64 = 7;
+
+/// Reads what [`encode_geometry`] wrote: the base mesh and the splits, each checked against the
+/// fan it applies to.
+pub(super) fn decode_geometry(
+    r: &mut Reader,
+    n0: usize,
+    f0: usize,
+    k: usize,
+) -> Result<(Mesh, Vec<StreamedSplit>, Grid<3>), MeshError> {
+    let grid = Grid::<3>::read(r, true, "position")?;
+    let length = r.varint()?;
+    if length > (r.bytes.len() - r.offset) as u64 {
+        return Err(r.error(format!("a geometry section of {length} bytes does not fit in the file")));
+    }
+    let start = r.offset;
+    let bytes = r.take(length as usize)?;
+    let needed =
+        n0 as u64 * 3 * grid.bits as u64 + f0 as u64 * 3 * width_for(n0 as u64) as u64 + k as u64 * MIN_SPLIT_BITS;
+    if needed > 8 * length {
+        return Err(MeshError::parse(
+            r.path,
+            "header",
+            format!(
+                "declares {n0} vertices, {f0} faces and {k} splits: at least {needed} bits, but the geometry section has {}",
+                8 * length
+            ),
+        ));
+    }
+    let mut b = BitReader::new(bytes);
+    let cut = |_: OutOfBits| MeshError::parse(r.path, format!("byte {start}"), "the geometry section is truncated");
+    let mut at: Vec<[i64; 3]> = Vec::with_capacity(n0 + k);
+    for _ in 0..n0 {
+        let mut q = [0i64; 3];
+        for c in &mut q {
+            *c = b.get(grid.bits as u32).map_err(cut)? as i64;
+        }
+        at.push(q);
+    }
+    let mut triangles = Vec::with_capacity(f0);
+    for f in 0..f0 {
+        let mut t = [0u32; 3];
+        for v in &mut t {
+            *v = b.get(width_for(n0 as u64)).map_err(cut)? as u32;
+        }
+        if let Some(&bad) = t.iter().find(|&&v| v as usize >= n0) {
+            return Err(MeshError::parse(r.path, format!("base face {f}"), format!("vertex {bad} out of range")));
+        }
+        triangles.push(t);
+    }
+    let positions: Vec<[f32; 3]> = at.iter().map(|q| grid.value(q)).collect();
+    let base = Mesh { positions, triangles, corners: Default::default() };
+    base.check().map_err(|e| MeshError::parse(r.path, "base mesh", e.to_string()))?;
+    let mut fans = Fans::new(&base.triangles, n0 + k, f0 + 2 * k);
+    let mut codes = GeometryCodes::default();
+    let mut splits = Vec::with_capacity(k);
+    let mut faces = f0 as u32;
+    let mut previous_error: Option<u64> = None;
+    for j in 0..k {
+        let bad = |reason: String| MeshError::parse(r.path, format!("split {j}"), reason);
+        let vt = (n0 + j) as u32;
+        let case = b.get(2).map_err(cut)?;
+        if case == 3 {
+            return Err(bad("invalid split case 3".into()));
+        }
+        let moves = b.bit().map_err(cut)?;
+        let vs = b.get(width_for(vt as u64)).map_err(cut)? as u32;
+        if vs >= vt {
+            return Err(bad(format!("vs {vs} out of range ({vt} vertices)")));
+        }
+        let ring = fans.neighbours(vs);
+        let mut neighbour = |present: bool| -> Result<u32, MeshError> {
+            if !present {
+                return Ok(NO_VERTEX);
+            }
+            let i = b.get(width_for(ring.len() as u64 + 1)).map_err(cut)? as usize;
+            match i.cmp(&ring.len()) {
+                std::cmp::Ordering::Less => Ok(ring[i]),
+                std::cmp::Ordering::Equal => {
+                    let v = b.get(width_for(vt as u64)).map_err(cut)? as u32;
+                    if v >= vt { Err(bad(format!("neighbour {v} out of range"))) } else { Ok(v) }
+                }
+                std::cmp::Ordering::Greater => Err(bad(format!("neighbour place {i} past the ring of {}", ring.len()))),
+            }
+        };
+        let vl = neighbour(case != 2)?;
+        let vr = neighbour(case != 1)?;
+        let from = at[vs as usize];
+        // Out-of-range deltas (a corrupt file) wrap and then fail the grid check; nothing overflows.
+        let top = (1i64 << grid.bits) - 1;
+        let on_grid = |q: &[i64; 3]| q.iter().all(|c| (0..=top).contains(c));
+        let mut new = [0i64; 3];
+        for a in 0..3 {
+            new[a] = from[a].wrapping_add(codes.new_vertex[a].get_signed(&mut b).map_err(cut)?);
+        }
+        if !on_grid(&new) {
+            return Err(bad("a position off the grid".into()));
+        }
+        let mut moved = from;
+        if moves {
+            for a in 0..3 {
+                let r = codes.moved_vertex[a].get_signed(&mut b).map_err(cut)?;
+                moved[a] = (from[a] - (new[a] - from[a]) / 2).wrapping_add(r);
+            }
+            if !on_grid(&moved) {
+                return Err(bad("a position off the grid".into()));
+            }
+        }
+        let code = match previous_error {
+            None => b.get(16).map_err(cut)?,
+            Some(p) => {
+                let c = (p as i64).wrapping_sub(codes.error.get_signed(&mut b).map_err(cut)?);
+                u64::try_from(c).map_err(|_| bad(format!("error code {c}")))?
+            }
+        };
+        if code > MAX_ERROR_CODE {
+            return Err(bad(format!("error code {code:#x} is not a finite error")));
+        }
+        previous_error = Some(code);
+        let split = topology(vs, vl, vr);
+        fans.split(&split, vt, faces).map_err(bad)?;
+        faces += split.added_faces() as u32;
+        at[vs as usize] = moved;
+        at.push(new);
+        splits.push(StreamedSplit {
+            vs,
+            vl,
+            vr,
+            new_position: grid.value(&new),
+            split_position: moves.then(|| grid.value(&moved)),
+            error: error_value(code),
+        });
+    }
+    if !b.at_end() {
+        return Err(MeshError::parse(r.path, format!("byte {start}"), "unexpected bits after the last split"));
+    }
+    Ok((base, splits, grid))
+}
+
+/// A corner not given its value yet.
+const UNSET: u32 = u32::MAX;
+
+/// The values already at `x`'s corners, in the order of the faces around it.
+fn candidates(fans: &Fans, corners: &[[u32; 3]], x: u32, list: &mut Vec<u32>) {
+    list.clear();
+    for &f in &fans.vertex_faces[x as usize] {
+        let t = fans.triangles[f as usize];
+        let k = t.iter().position(|&v| v == x).expect("the face has the vertex");
+        let c = corners[f as usize][k];
+        if c != UNSET && !list.contains(&c) {
+            list.push(c);
+        }
+    }
+}
+
+/// What a value is made of, as grid integers: octahedral normal, texture coordinates, colour,
+/// material (−1 for none), those present.
+struct Layout {
+    normal: bool,
+    uv: bool,
+    color: bool,
+    material: bool,
+}
+
+impl Layout {
+    fn of(mask: u8) -> Layout {
+        Layout {
+            normal: mask & ATTRIBUTE_NORMAL != 0,
+            uv: mask & ATTRIBUTE_UV != 0,
+            color: mask & ATTRIBUTE_COLOR != 0,
+            material: mask & ATTRIBUTE_MATERIAL != 0,
+        }
+    }
+
+    /// The code each integer of a value uses: 0 normal, 1 uv, 2 colour, 3 material.
+    fn kinds(&self) -> Vec<usize> {
+        let mut k = Vec::new();
+        k.extend(std::iter::repeat_n(0, 2 * self.normal as usize));
+        k.extend(std::iter::repeat_n(1, 2 * self.uv as usize));
+        k.extend(std::iter::repeat_n(2, 4 * self.color as usize));
+        k.extend(std::iter::repeat_n(3, self.material as usize));
+        k
+    }
+}
+
+/// The attribute stream's state, the same on both sides: the values introduced so far, the
+/// corners' values at the current level and the adaptive codes.
+struct AttributeState {
+    table: Vec<Vec<i64>>,
+    corners: Vec<[u32; 3]>,
+    codes: [Rice; 4],
+    kinds: Vec<usize>,
+    list: Vec<u32>,
+    /// Writer only: the table index of each value.
+    index: HashMap<Vec<i64>, u32>,
+}
+
+impl AttributeState {
+    fn new(layout: &Layout, total_faces: usize) -> AttributeState {
+        AttributeState {
+            table: Vec::new(),
+            corners: vec![[UNSET; 3]; total_faces],
+            codes: Default::default(),
+            kinds: layout.kinds(),
+            list: Vec::new(),
+            index: HashMap::new(),
+        }
+    }
+
+    /// The value a new one is coded against: the first candidate, else the last value introduced.
+    fn predictor(&self) -> Vec<i64> {
+        match self.list.first() {
+            Some(&c) => self.table[c as usize].clone(),
+            None => self.table.last().cloned().unwrap_or_else(|| vec![0; self.kinds.len()]),
+        }
+    }
+
+    /// Writes the corner value `value` given the candidates in `self.list`: its place among them
+    /// in unary, or past them a flag and either the index of an equal value introduced before or
+    /// the new value's deltas from the predictor. Returns its table index.
+    fn put(&mut self, w: &mut BitWriter, value: Vec<i64>) -> u32 {
+        let m = self.list.len();
+        if let Some(i) = self.list.iter().position(|&c| self.table[c as usize] == value) {
+            w.put((1u64 << i) - 1, i as u32);
+            w.bit(false);
+            return self.list[i];
+        }
+        w.put((1u64 << m) - 1, m as u32);
+        if let Some(&t) = self.index.get(&value) {
+            w.bit(true);
+            w.put(t as u64, width_for(self.table.len() as u64));
+            return t;
+        }
+        w.bit(false);
+        let p = self.predictor();
+        for (i, (&v, &p)) in value.iter().zip(&p).enumerate() {
+            self.codes[self.kinds[i]].put_signed(w, v - p);
+        }
+        self.index.insert(value.clone(), self.table.len() as u32);
+        self.table.push(value);
+        self.table.len() as u32 - 1
+    }
+
+    fn get(&mut self, b: &mut BitReader) -> Result<Result<u32, String>, OutOfBits> {
+        let m = self.list.len();
+        let mut i = 0;
+        while i < m && b.bit()? {
+            i += 1;
+        }
+        if i < m {
+            return Ok(Ok(self.list[i]));
+        }
+        if b.bit()? {
+            let t = b.get(width_for(self.table.len() as u64))?;
+            if t >= self.table.len() as u64 {
+                return Ok(Err(format!("attribute value {t} out of range ({} values)", self.table.len())));
+            }
+            return Ok(Ok(t as u32));
+        }
+        let p = self.predictor();
+        let mut value = Vec::with_capacity(p.len());
+        for (i, &p) in p.iter().enumerate() {
+            value.push(p.wrapping_add(self.codes[self.kinds[i]].get_signed(b)?));
+        }
+        self.table.push(value);
+        Ok(Ok(self.table.len() as u32 - 1))
+    }
+}
+
+/// Writes the attribute grids and stream: per base corner and per split corner (each moved
+/// face's corner at `vt`, then the new faces' corners) its value, chosen among those already at
+/// that vertex or introduced as a delta from one of them.
+pub(super) fn encode_attributes(
+    out: &mut Vec<u8>,
+    pm: &ProgressiveMesh,
+    a: &PmAttributes,
+    mask: u8,
+    quantization: &Quantization,
+) {
+    out.push(mask);
+    let layout = Layout::of(mask);
+    if layout.normal {
+        out.push(quantization.normal_bits);
+    }
+    let uvs = quantization.uvs.filter(|_| layout.uv).expect_or(layout.uv);
+    let colors = quantization.colors.filter(|_| layout.color).expect_or(layout.color);
+    if let Some(g) = &uvs {
+        g.write(out, false);
+    }
+    if let Some(g) = &colors {
+        g.write(out, false);
+    }
+    let v = &a.values;
+    let value_of = |id: u32| -> Vec<i64> {
+        let id = id as usize;
+        let mut q = Vec::with_capacity(9);
+        if let Some(n) = &v.normals {
+            q.extend(octahedral(n[id], quantization.normal_bits));
+        }
+        if let (Some(u), Some(g)) = (&v.uvs, &uvs) {
+            q.extend(g.quantize(&u[id]));
+        }
+        if let (Some(c), Some(g)) = (&v.colors, &colors) {
+            q.extend(g.quantize(&c[id]));
+        }
+        if let Some(m) = &v.materials {
+            q.push(if m[id] == NO_MATERIAL { -1 } else { m[id] as i64 });
+        }
+        q
+    };
+    let base = pm.base();
+    let total_faces = pm.faces_at_level(pm.levels());
+    let mut state = AttributeState::new(&layout, total_faces);
+    let mut fans = Fans::new(&base.triangles, base.vertex_count() + pm.levels(), total_faces);
+    let mut w = BitWriter::default();
+    for (f, t) in base.triangles.iter().enumerate() {
+        for (k, &x) in t.iter().enumerate() {
+            candidates(&fans, &state.corners, x, &mut state.list);
+            state.corners[f][k] = state.put(&mut w, value_of(a.base[f][k]));
+        }
+    }
+    let n0 = base.vertex_count();
+    for (j, (s, sa)) in pm.splits().iter().zip(&a.splits).enumerate() {
+        let vt = (n0 + j) as u32;
+        let first = pm.faces_at_level(j);
+        fans.split(s, vt, first as u32).expect("a ProgressiveMesh replays");
+        let moved = std::mem::take(&mut fans.moved);
+        let olds = unset_moved(&fans, &mut state.corners, &moved, vt);
+        for (&f, &(k, old)) in moved.iter().zip(&olds) {
+            candidates(&fans, &state.corners, vt, &mut state.list);
+            if !state.list.contains(&old) {
+                state.list.push(old);
+            }
+            let value = match sa.moved.iter().find(|m| m.0 == f) {
+                Some(&(_, id)) => value_of(id),
+                None => state.table[old as usize].clone(),
+            };
+            state.corners[f as usize][k] = state.put(&mut w, value);
+        }
+        fans.moved = moved;
+        for (slot, face) in (first..pm.faces_at_level(j + 1)).enumerate() {
+            let t = fans.triangles[face];
+            for (k, &x) in t.iter().enumerate() {
+                candidates(&fans, &state.corners, x, &mut state.list);
+                state.corners[face][k] = state.put(&mut w, value_of(sa.new_faces[slot][k]));
+            }
+        }
+    }
+    let bytes = w.finish();
+    put_varint(out, bytes.len() as u64);
+    out.extend_from_slice(&bytes);
+}
+
+/// Marks each moved face's corner at `vt` unset; returns (corner, value it had).
+fn unset_moved(fans: &Fans, corners: &mut [[u32; 3]], moved: &[u32], vt: u32) -> Vec<(usize, u32)> {
+    moved
+        .iter()
+        .map(|&f| {
+            let k = fans.triangles[f as usize].iter().position(|&v| v == vt).expect("moved to vt");
+            let old = corners[f as usize][k];
+            corners[f as usize][k] = UNSET;
+            (k, old)
+        })
+        .collect()
+}
+
+trait ExpectOr {
+    /// `self`, which must be present when `needed` (the writer fits a grid for every attribute).
+    fn expect_or(self, needed: bool) -> Self;
+}
+
+impl<T> ExpectOr for Option<T> {
+    fn expect_or(self, needed: bool) -> Self {
+        assert!(self.is_some() || !needed, "a grid for every attribute present");
+        self
+    }
+}
+
+/// Reads what [`encode_attributes`] wrote, replaying the splits of `pm` (already read).
+pub(super) fn decode_attributes(
+    r: &mut Reader,
+    pm: &ProgressiveMesh,
+) -> Result<(PmAttributes, u8, Option<Grid<2>>, Option<Grid<4>>), MeshError> {
+    let mask = r.take(1)?[0];
+    super::check_mask(r, mask)?;
+    let layout = Layout::of(mask);
+    let normal_bits = if layout.normal {
+        let bits = r.take(1)?[0];
+        if bits == 0 || bits > MAX_BITS {
+            return Err(r.error(format!("normal grid of {bits} bits (1 to {MAX_BITS})")));
+        }
+        bits
+    } else {
+        0
+    };
+    let uvs = if layout.uv { Some(Grid::<2>::read(r, false, "texture coordinate")?) } else { None };
+    let colors = if layout.color { Some(Grid::<4>::read(r, false, "colour")?) } else { None };
+    let length = r.varint()?;
+    if length > (r.bytes.len() - r.offset) as u64 {
+        return Err(r.error(format!("an attribute section of {length} bytes does not fit in the file")));
+    }
+    let start = r.offset;
+    let bytes = r.take(length as usize)?;
+    let path = r.path;
+    let mut b = BitReader::new(bytes);
+    let cut = |_: OutOfBits| MeshError::parse(path, format!("byte {start}"), "the attribute section is truncated");
+    let base = pm.base();
+    let total_faces = pm.faces_at_level(pm.levels());
+    let mut state = AttributeState::new(&layout, total_faces);
+    let mut fans = Fans::new(&base.triangles, base.vertex_count() + pm.levels(), total_faces);
+    let mut base_corners = Vec::with_capacity(base.face_count());
+    for (f, t) in base.triangles.iter().enumerate() {
+        for (k, &x) in t.iter().enumerate() {
+            candidates(&fans, &state.corners, x, &mut state.list);
+            state.corners[f][k] = state
+                .get(&mut b)
+                .map_err(cut)?
+                .map_err(|reason| MeshError::parse(path, format!("base face {f}"), reason))?;
+        }
+        base_corners.push(state.corners[f]);
+    }
+    let n0 = base.vertex_count();
+    let mut splits = Vec::with_capacity(pm.levels());
+    for (j, s) in pm.splits().iter().enumerate() {
+        let bad = |reason: String| MeshError::parse(path, format!("split {j} attributes"), reason);
+        let vt = (n0 + j) as u32;
+        let first = pm.faces_at_level(j);
+        fans.split(s, vt, first as u32).map_err(bad)?;
+        let moved_faces = std::mem::take(&mut fans.moved);
+        let olds = unset_moved(&fans, &mut state.corners, &moved_faces, vt);
+        let mut moved = Vec::new();
+        for (&f, &(k, old)) in moved_faces.iter().zip(&olds) {
+            candidates(&fans, &state.corners, vt, &mut state.list);
+            if !state.list.contains(&old) {
+                state.list.push(old);
+            }
+            let value = state.get(&mut b).map_err(cut)?.map_err(bad)?;
+            state.corners[f as usize][k] = value;
+            if value != old {
+                moved.push((f, value));
+            }
+        }
+        fans.moved = moved_faces;
+        let mut new_faces = [[0; 3]; 2];
+        for (slot, face) in (first..pm.faces_at_level(j + 1)).enumerate() {
+            let t = fans.triangles[face];
+            for (k, &x) in t.iter().enumerate() {
+                candidates(&fans, &state.corners, x, &mut state.list);
+                state.corners[face][k] = state.get(&mut b).map_err(cut)?.map_err(bad)?;
+            }
+            new_faces[slot] = state.corners[face];
+        }
+        splits.push(SplitAttributes { new_faces, moved });
+    }
+    if !b.at_end() {
+        return Err(MeshError::parse(path, format!("byte {start}"), "unexpected bits after the last attribute"));
+    }
+    let mut values = CornerAttributes {
+        normals: layout.normal.then(Vec::new),
+        uvs: layout.uv.then(Vec::new),
+        colors: layout.color.then(Vec::new),
+        uv_origin_top: mask & ATTRIBUTE_UV_ORIGIN_TOP != 0,
+        materials: layout.material.then(Vec::new),
+        library: None,
+    };
+    for (t, q) in state.table.iter().enumerate() {
+        let bad = |what: &str| MeshError::parse(path, format!("attribute value {t}"), format!("{what} off its grid"));
+        let mut rest = &q[..];
+        if let Some(n) = &mut values.normals {
+            let top = (1i64 << normal_bits) - 1;
+            if rest[..2].iter().any(|c| !(0..=top).contains(c)) {
+                return Err(bad("normal"));
+            }
+            n.push(from_octahedral(&rest[..2], normal_bits));
+            rest = &rest[2..];
+        }
+        if let (Some(u), Some(g)) = (&mut values.uvs, &uvs) {
+            let top = (1i64 << g.bits) - 1;
+            if rest[..2].iter().any(|c| !(0..=top).contains(c)) {
+                return Err(bad("texture coordinate"));
+            }
+            u.push(g.value(&rest[..2]));
+            rest = &rest[2..];
+        }
+        if let (Some(c), Some(g)) = (&mut values.colors, &colors) {
+            let top = (1i64 << g.bits) - 1;
+            if rest[..4].iter().any(|c| !(0..=top).contains(c)) {
+                return Err(bad("colour"));
+            }
+            c.push(g.value(&rest[..4]));
+            rest = &rest[4..];
+        }
+        if let Some(m) = &mut values.materials {
+            let material = match rest[0] {
+                -1 => NO_MATERIAL,
+                m if (0..NO_MATERIAL as i64).contains(&m) => m as u32,
+                m => return Err(MeshError::parse(path, format!("attribute value {t}"), format!("material {m}"))),
+            };
+            m.push(material);
+        }
+    }
+    Ok((PmAttributes { values, base: base_corners, splits }, normal_bits, uvs, colors))
+}
