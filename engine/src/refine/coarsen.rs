@@ -160,7 +160,9 @@ pub(crate) fn coarsen(
         popped.push(e);
         let t = state.triangle(f);
         let kinds = t.map(|v| state.kind(v));
-        if kinds.contains(&VertexKind::Frozen) || kinds.iter().filter(|&&k| k == VertexKind::Boundary).count() >= 2 {
+        if kinds.iter().any(|k| matches!(k, VertexKind::Frozen | VertexKind::Anchored))
+            || kinds.iter().filter(|&&k| k == VertexKind::Boundary).count() >= 2
+        {
             continue;
         }
         // Step 1: the cheapest legal edge of the triangle.

@@ -19,6 +19,10 @@ pub(crate) enum VertexKind {
     Boundary,
     /// Non-manifold or inconsistently oriented: no collapse touches it.
     Frozen,
+    /// Never moves or disappears, but a neighbour may collapse into it (along the boundary, for a
+    /// boundary neighbour): where three or more sets of attribute values meet, a locked seam's
+    /// vertices and a locked border's. Assigned by the kernel, not by the scan.
+    Anchored,
 }
 
 /// [`prepare`], borrowing the mesh itself when there is nothing to drop (the usual input); the

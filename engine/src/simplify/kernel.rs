@@ -167,7 +167,7 @@ impl<'o> State<'o> {
         if options.boundary == BoundaryMode::Lock {
             for vertex in state.vertices.iter_mut() {
                 if vertex.kind == VertexKind::Boundary {
-                    vertex.kind = VertexKind::Frozen;
+                    vertex.kind = VertexKind::Anchored;
                 }
             }
         }
@@ -233,7 +233,7 @@ impl<'o> State<'o> {
     /// with one set of values at the removed vertex, the survivor's in the faces of the edge
     /// (which must agree); on a seam (two sets), the edge must be a seam edge, and each side takes
     /// the survivor's values on that side ([`State::seam_sides`], rule 7). A vertex with three or
-    /// more sets (where seams meet) is frozen. No value is invented and none crosses a seam.
+    /// more sets (where seams meet) is anchored: it never moves or goes, but takes in neighbours. No value is invented and none crosses a seam.
     /// (Values interpolated at the new position are later work.) Needs the triangle array, so it
     /// is kept current from here.
     pub(crate) fn carry_attributes(&mut self, mesh: &Mesh) {
@@ -257,16 +257,16 @@ impl<'o> State<'o> {
                 sets[0] = k as u32;
             } else if sets[1] == NONE {
                 sets[1] = k as u32;
-            } else {
-                self.vertices[v as usize].kind = VertexKind::Frozen;
+            } else if self.vertices[v as usize].kind != VertexKind::Frozen {
+                self.vertices[v as usize].kind = VertexKind::Anchored;
             }
         }
         // (A survivor keeps its flag: a seam vertex goes only into one on the same seam.)
         self.on_seam = seen.iter().map(|sets| sets[1] != NONE).collect();
         if self.options.lock_seams {
             for (vertex, &seam) in self.vertices.iter_mut().zip(&self.on_seam) {
-                if seam {
-                    vertex.kind = VertexKind::Frozen;
+                if seam && vertex.kind != VertexKind::Frozen {
+                    vertex.kind = VertexKind::Anchored;
                 }
             }
         }

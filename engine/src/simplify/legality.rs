@@ -159,8 +159,7 @@ impl State<'_> {
         }
         // Rule 3, the merged vertex keeps enough faces.
         let remaining = self.fans[a as usize].len() + self.fans[b as usize].len() - 2 * shared_count;
-        let interior = self.vertices[a as usize].kind == VertexKind::Interior
-            && self.vertices[b as usize].kind == VertexKind::Interior;
+        let interior = self.is_interior(a) && self.is_interior(b);
         if remaining < if interior { 3 } else { 1 } {
             return Err(Refusal::TooFewFaces);
         }
@@ -230,6 +229,18 @@ impl State<'_> {
             return Err(Refusal::Fold);
         }
         Ok(Legal { candidate: *c, check: self.check_id })
+    }
+
+    /// Whether `v` has a closed fan (an anchor is looked at: its kind does not say).
+    fn is_interior(&self, v: u32) -> bool {
+        match self.vertices[v as usize].kind {
+            VertexKind::Interior => true,
+            VertexKind::Boundary | VertexKind::Frozen => false,
+            VertexKind::Anchored => {
+                let fan = &self.fans[v as usize];
+                fan.iter().all(|c| fan.iter().any(|d| d.prev == c.next))
+            }
+        }
     }
 
     /// Whether the moved face `face` (now with unit normal `n_new`, far edge (x, y) at `px`, `py`)

@@ -60,10 +60,14 @@
 //!       \  /                 |
 //!        vr                  vr
 //! ```
-//! 1. neither endpoint is frozen (non-manifold or inconsistently oriented neighbourhood);
+//! 1. neither endpoint is frozen (non-manifold or inconsistently oriented neighbourhood); an
+//!    anchored endpoint (where three or more sets of attribute values meet, a locked seam's or a
+//!    locked border's vertex) stays where it is and only takes in the other end, and two anchors
+//!    never collapse into each other;
 //! 2. boundaries: an interior edge with both ends on the boundary is refused (it would pinch the
 //!    surface); a boundary vertex is never removed in favour of an interior one and does not move
-//!    off its boundary; with [`BoundaryMode::Lock`] boundary vertices never move or disappear;
+//!    off its boundary (into an anchor, only along the boundary); with [`BoundaryMode::Lock`]
+//!    boundary vertices are anchors: they never move or disappear;
 //! 3. link condition: the common neighbours of a and b are exactly vl and vr (Dey et al.), and the
 //!    merged vertex keeps at least one face (three for an interior vertex), so the surface stays a
 //!    2-manifold and no component collapses to nothing;
@@ -78,7 +82,8 @@
 //!    anyway;
 //! 7. with per-corner attributes (texture coordinates, normals, colours), no values cross a seam:
 //!    b's corners take a's values on the same side, so an edge into a seam vertex must run along
-//!    the seam, and a vertex where three or more sets of values meet is frozen
+//!    the seam, and a vertex where three or more sets of values meet is anchored: it never goes,
+//!    and a neighbour that goes into it takes its values on the side it comes from
 //!    (`State::carry_attributes`, `State::seam_sides`). Without attributes the rule costs nothing.
 
 mod classify;
@@ -165,7 +170,8 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
             }),
         )
     });
-    let frozen_vertices = state.vertices.iter().filter(|v| v.kind == VertexKind::Frozen).count();
+    let frozen_vertices =
+        state.vertices.iter().filter(|v| matches!(v.kind, VertexKind::Frozen | VertexKind::Anchored)).count();
     let stats = SimplifyStats {
         faces_in,
         faces_out: simplified.face_count(),

@@ -40,6 +40,15 @@ impl State<'_> {
         let lock = self.options.boundary == BoundaryMode::Lock;
         // Which endpoints may survive, and whether the survivor may move.
         let (may_keep_a, may_keep_b, may_move) = match (ka, kb) {
+            (VertexKind::Anchored, VertexKind::Anchored) => return None,
+            // A boundary vertex goes into an anchor only along its boundary.
+            (VertexKind::Anchored, VertexKind::Boundary) | (VertexKind::Boundary, VertexKind::Anchored)
+                if self.edge_corners(a, b).1 != 1 =>
+            {
+                return None;
+            }
+            (VertexKind::Anchored, _) => (true, false, false),
+            (_, VertexKind::Anchored) => (false, true, false),
             (VertexKind::Boundary, VertexKind::Boundary) => {
                 if lock || self.edge_corners(a, b).1 != 1 {
                     return None; // interior edge joining two boundary points, or locked border
