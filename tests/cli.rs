@@ -188,6 +188,9 @@ fn simplify_pm_lod_chain() {
     assert!(lod["faces"].as_u64().unwrap() <= 1000 && lod["faces"].as_u64().unwrap() >= 998);
     // Errors: bad ratio, corrupt .pm.
     fails_with(&["simplify", s(&input), "-o", s(&out), "--ratio", "1.5"], "ratio");
+    fails_with(&["simplify", s(&input), "-o", s(&out), "--attribute-weights", "uv=-1"], "attribute_weights.uv");
+    fails_with(&["simplify", s(&input), "-o", s(&out), "--attribute-weights", "gloss=1"], "unknown attribute");
+    ok_json(&["simplify", s(&input), "-o", s(&out), "--attribute-weights", "uv=4,normal=2", "--json"]);
     std::fs::write(dir.join("bad.pm"), b"MLPM garbage").unwrap();
     fails_with(&["lod", s(&dir.join("bad.pm")), "--faces", "10", "-o", s(&mid)], "bad.pm");
     for metric in ["qem", "melax", "qfvp"] {

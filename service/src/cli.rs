@@ -263,6 +263,10 @@ pub struct SimplifyArgs {
     /// Keep every vertex of a texture, normal, colour or material seam in place.
     #[arg(long)]
     pub lock_seams: bool,
+    /// Weights of the appearance term of the cost, e.g. `uv=4,normal=2` (each ≥ 0; unset ones 0;
+    /// off by default: docs/attributes-report.md has what it does and costs).
+    #[arg(long, value_name = "uv=W,normal=W,color=W", value_parser = parse_attribute_weights)]
+    pub attribute_weights: Option<proto::AttributeWeights>,
     /// Largest change of a face normal one collapse may cause, in degrees (default 90).
     #[arg(long)]
     pub max_normal_change: Option<f64>,
@@ -326,6 +330,7 @@ impl SimplifyArgs {
             compute_hausdorff: self.hausdorff,
             guard: self.guard,
             progressive_lossless: self.pm_lossless,
+            attribute_weights: self.attribute_weights,
         };
         SimplifyJob { input: self.input.clone(), output: self.output.clone(), options, pm: self.pm.clone() }
     }
@@ -575,4 +580,21 @@ pub fn parse_job(op: &str, input: &str, output: &str, args: &[String]) -> anyhow
         Command::Refine(a) => Ok(Job::Refine(a)),
         _ => anyhow::bail!("op must be simplify or refine, not {op}"),
     }
+}
+
+/// `uv=W,normal=W,color=W` (any subset, any order) as the contract's weights; the range is
+/// checked where every front end's options are.
+fn parse_attribute_weights(text: &str) -> Result<proto::AttributeWeights, String> {
+    let mut weights = proto::AttributeWeights::default();
+    for part in text.split(',').filter(|p| !p.trim().is_empty()) {
+        let (name, value) = part.split_once('=').ok_or_else(|| format!("'{part}' is not NAME=WEIGHT"))?;
+        let value: f64 = value.trim().parse().map_err(|_| format!("'{value}' is not a number"))?;
+        match name.trim() {
+            "uv" => weights.uv = value,
+            "normal" => weights.normal = value,
+            "color" | "colour" => weights.color = value,
+            other => return Err(format!("unknown attribute '{other}' (uv, normal, color)")),
+        }
+    }
+    Ok(weights)
 }

@@ -339,6 +339,9 @@ impl TryFrom<&proto::SimplifyOptions> for SimplifyOptions {
             record_progressive: o.return_progressive,
             guard: o.guard.unwrap_or(defaults.guard),
             lock_seams: o.lock_seams,
+            attribute_weights: o.attribute_weights.as_ref().map_or(defaults.attribute_weights, |w| {
+                meshlod_engine::simplify::AttributeWeights { uv: w.uv, normal: w.normal, color: w.color }
+            }),
             cancel: None,
         })
     }

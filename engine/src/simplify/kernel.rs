@@ -60,6 +60,9 @@ pub(crate) struct State<'o> {
     /// such a vertex go only into another on the seam, so with one end on a seam, the ranking
     /// keeps that end in place ([`State::choose`]) rather than picking a collapse rule 7 refuses.
     pub(super) on_seam: Vec<bool>,
+    /// The appearance term's weights for texture coordinates, normals and colours, times the
+    /// squared bounding-box diagonal (so that they compare with the quadric's squared distances).
+    pub(super) attribute_weights: [f64; 3],
     /// With attributes and a progressive mesh to record: per collapse, the corners of the removed
     /// vertex that took new values, as (face, the input corner whose values it had before), and
     /// where each collapse's entries end. The vertex splits restore them.
@@ -158,6 +161,7 @@ impl<'o> State<'o> {
             attributes: CornerAttributes::default(),
             corner_source: Vec::new(),
             on_seam: Vec::new(),
+            attribute_weights: [0.0; 3],
             journal: Vec::new(),
             journal_ends: Vec::new(),
         };
@@ -261,6 +265,13 @@ impl<'o> State<'o> {
                 self.vertices[v as usize].kind = VertexKind::Anchored;
             }
         }
+        let (lo, hi) = mesh
+            .positions
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(to_f64(p)), hi.max(to_f64(p))));
+        let diagonal2 = (hi - lo).length_squared();
+        let w = self.options.attribute_weights;
+        self.attribute_weights = [w.uv * diagonal2, w.normal * diagonal2, w.color * diagonal2];
         // (A survivor keeps its flag: a seam vertex goes only into one on the same seam.)
         self.on_seam = seen.iter().map(|sets| sets[1] != NONE).collect();
         if self.options.lock_seams {
@@ -273,7 +284,7 @@ impl<'o> State<'o> {
     }
 
     /// The input corner whose values vertex `v` has in face `f`.
-    fn source_at(&self, f: u32, v: u32) -> u32 {
+    pub(super) fn source_at(&self, f: u32, v: u32) -> u32 {
         let k = self.triangles[f as usize].iter().position(|&x| x == v).expect("v is a corner of f");
         self.corner_source[3 * f as usize + k]
     }

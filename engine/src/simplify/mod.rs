@@ -86,6 +86,7 @@
 //!    and a neighbour that goes into it takes its values on the side it comes from
 //!    (`State::carry_attributes`, `State::seam_sides`). Without attributes the rule costs nothing.
 
+mod attribute_cost;
 mod classify;
 mod cost;
 mod guard;
@@ -105,7 +106,8 @@ pub(crate) use classify::prepare_with_attributes;
 pub(crate) use kernel::State;
 pub use legality::{FOLD_DOT, MIN_TRIANGLE_QUALITY};
 pub use options::{
-    BoundaryMode, Metric, NormalUpdate, Placement, Refusals, Simplified, SimplifyOptions, SimplifyStats, StopReason,
+    AttributeWeights, BoundaryMode, Metric, NormalUpdate, Placement, Refusals, Simplified, SimplifyOptions,
+    SimplifyStats, StopReason,
 };
 pub use run::MAX_PASSES;
 pub use search::{WSearch, simplify_search_w};

@@ -95,6 +95,26 @@ pub enum BoundaryMode {
     Lock,
 }
 
+/// Weights of [`SimplifyOptions::attribute_weights`], each ≥ 0, in squared attribute units per
+/// squared bounding-box diagonal (1 for texture coordinates charges a full-texture jump like a
+/// displacement by the diagonal).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct AttributeWeights {
+    /// Texture coordinates.
+    pub uv: f64,
+    /// Normals (unit vectors).
+    pub normal: f64,
+    /// Colours (RGBA in [0, 1]).
+    pub color: f64,
+}
+
+impl AttributeWeights {
+    /// Whether the term is off.
+    pub fn is_off(&self) -> bool {
+        self.uv == 0.0 && self.normal == 0.0 && self.color == 0.0
+    }
+}
+
 /// Options of [`simplify`]. Targets combine: simplification stops at whichever is met first.
 #[derive(Debug, Clone)]
 pub struct SimplifyOptions {
@@ -126,6 +146,11 @@ pub struct SimplifyOptions {
     /// Keep every vertex on a seam (where a vertex's corners differ in texture coordinates,
     /// normals, colours or material) in place: seams keep every vertex they had.
     pub lock_seams: bool,
+    /// Weights of the appearance term of the cost (texture coordinates, normals, colours): how far
+    /// the values a collapse leaves at the merged vertex are from what the faces' own attribute
+    /// fields give there (`attribute_cost`). All 0, the default, turns it off; measured in
+    /// docs/attributes-report.md.
+    pub attribute_weights: AttributeWeights,
     /// Set to `true` by another thread to stop the work; the call then returns
     /// [`MeshError::Cancelled`].
     pub cancel: Option<Arc<AtomicBool>>,
@@ -147,6 +172,7 @@ impl Default for SimplifyOptions {
             record_progressive: false,
             guard: 0.0,
             lock_seams: false,
+            attribute_weights: AttributeWeights::default(),
             cancel: None,
         }
     }
@@ -262,6 +288,16 @@ impl SimplifyOptions {
                 name: "guard",
                 reason: "the distance guard adds to the quadric costs (QFVP, QEM), not to Melax's".into(),
             });
+        }
+        let a = self.attribute_weights;
+        for (name, w) in [
+            ("attribute_weights.uv", a.uv),
+            ("attribute_weights.normal", a.normal),
+            ("attribute_weights.color", a.color),
+        ] {
+            if !(w.is_finite() && w >= 0.0) {
+                return Err(MeshError::InvalidParameter { name, reason: format!("{w} must be a finite number ≥ 0") });
+            }
         }
         let angle = self.max_normal_change_degrees;
         if !(angle > 0.0 && angle <= 180.0) {

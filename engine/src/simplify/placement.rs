@@ -108,14 +108,16 @@ impl State<'_> {
                     // the midpoint (a nearly singular system can run far off), has the lowest
                     // error of all placements: nothing else needs evaluating.
                     let error = q.error(p);
-                    return Some(Choice { cost: error * factor, error, keep: mover, position: p });
+                    let survivor = if self.fans[a as usize].len() >= self.fans[b as usize].len() { a } else { b };
+                    let appearance = self.attribute_error(survivor, survivor ^ a ^ b, p);
+                    return Some(Choice { cost: (error + appearance) * factor, error, keep: mover, position: p });
                 }
                 let (e_a, e_b) = (q.error(pa), q.error(pb));
                 if may_keep_a {
-                    consider(Keep::A, pa, e_a * factor, e_a);
+                    consider(Keep::A, pa, (e_a + self.attribute_error(a, b, pa)) * factor, e_a);
                 }
                 if may_keep_b {
-                    consider(Keep::B, pb, e_b * factor, e_b);
+                    consider(Keep::B, pb, (e_b + self.attribute_error(b, a, pb)) * factor, e_b);
                 }
                 if may_move && self.options.placement != Placement::Endpoint {
                     let mid = (pa + pb) * 0.5;
