@@ -63,6 +63,8 @@ pub(crate) struct State<'o> {
     /// The appearance term's weights for texture coordinates, normals and colours, times the
     /// squared bounding-box diagonal (so that they compare with the quadric's squared distances).
     pub(super) attribute_weights: [f64; 3],
+    /// Whether the appearance term is on (weights set and attributes carried).
+    pub(super) appearance_on: bool,
     /// With attributes and a progressive mesh to record: per collapse, the corners of the removed
     /// vertex that took new values, as (face, the input corner whose values it had before), and
     /// where each collapse's entries end. The vertex splits restore them.
@@ -162,6 +164,7 @@ impl<'o> State<'o> {
             corner_source: Vec::new(),
             on_seam: Vec::new(),
             attribute_weights: [0.0; 3],
+            appearance_on: false,
             journal: Vec::new(),
             journal_ends: Vec::new(),
         };
@@ -272,6 +275,10 @@ impl<'o> State<'o> {
         let diagonal2 = (hi - lo).length_squared();
         let w = self.options.attribute_weights;
         self.attribute_weights = [w.uv * diagonal2, w.normal * diagonal2, w.color * diagonal2];
+        if !self.attribute_weights.iter().all(|w| w.is_finite()) {
+            self.attribute_weights = [0.0; 3];
+        }
+        self.appearance_on = self.attribute_weights != [0.0; 3];
         // (A survivor keeps its flag: a seam vertex goes only into one on the same seam.)
         self.on_seam = seen.iter().map(|sets| sets[1] != NONE).collect();
         if self.options.lock_seams {

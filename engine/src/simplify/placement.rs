@@ -92,6 +92,7 @@ impl State<'_> {
                 // The normal term depends on the edge only, not on where the merged vertex goes,
                 // so every placement of this edge is ranked by its quadric error alone.
                 let factor = self.normal_factor(va, vb);
+                let appearance_on = self.appearance_on;
                 let mover = match (may_keep_a, may_keep_b) {
                     (true, false) => Keep::A,
                     (false, true) => Keep::B,
@@ -108,16 +109,23 @@ impl State<'_> {
                     // the midpoint (a nearly singular system can run far off), has the lowest
                     // error of all placements: nothing else needs evaluating.
                     let error = q.error(p);
-                    let survivor = if self.fans[a as usize].len() >= self.fans[b as usize].len() { a } else { b };
-                    let appearance = self.attribute_error(survivor, survivor ^ a ^ b, p);
+                    let appearance = if appearance_on {
+                        let survivor = if self.fans[a as usize].len() >= self.fans[b as usize].len() { a } else { b };
+                        self.attribute_error(survivor, survivor ^ a ^ b, p)
+                    } else {
+                        0.0
+                    };
                     return Some(Choice { cost: (error + appearance) * factor, error, keep: mover, position: p });
                 }
                 let (e_a, e_b) = (q.error(pa), q.error(pb));
+                let appearance = |survivor: u32, p: DVec3| {
+                    if appearance_on { self.attribute_error(survivor, survivor ^ a ^ b, p) } else { 0.0 }
+                };
                 if may_keep_a {
-                    consider(Keep::A, pa, (e_a + self.attribute_error(a, b, pa)) * factor, e_a);
+                    consider(Keep::A, pa, (e_a + appearance(a, pa)) * factor, e_a);
                 }
                 if may_keep_b {
-                    consider(Keep::B, pb, (e_b + self.attribute_error(b, a, pb)) * factor, e_b);
+                    consider(Keep::B, pb, (e_b + appearance(b, pb)) * factor, e_b);
                 }
                 if may_move && self.options.placement != Placement::Endpoint {
                     let mid = (pa + pb) * 0.5;

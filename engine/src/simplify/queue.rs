@@ -51,9 +51,8 @@ impl State<'_> {
         let vv = &self.vertices[v as usize];
         let (v0, v1) = (&self.vertices[us[0] as usize], &self.vertices[us[1] as usize]);
         // (The appearance term needs the fans: an edge with it is ranked alone.)
-        let quadric_cost = self.options.metric != Metric::Melax
-            && self.options.placement == Placement::Optimal
-            && (self.corner_source.is_empty() || self.attribute_weights == [0.0; 3]);
+        let quadric_cost =
+            self.options.metric != Metric::Melax && self.options.placement == Placement::Optimal && !self.appearance_on;
         let interior = quadric_cost & (vv.kind == VertexKind::Interior);
         let usual = [interior & (v0.kind == VertexKind::Interior), interior & (v1.kind == VertexKind::Interior)];
         if !(usual[0] || usual[1]) {
