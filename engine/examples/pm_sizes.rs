@@ -9,22 +9,12 @@
 use meshlod_engine::Mesh;
 use meshlod_engine::io::read_mesh;
 use meshlod_engine::pm::ProgressiveMesh;
-use meshlod_engine::pm_format::{encode, encode_lossless};
+use meshlod_engine::pm_format::{encode, encode_lossless, materials_section_len};
 use meshlod_engine::simplify::{Placement, SimplifyOptions, simplify};
 
 /// Bytes per split of `encode`, without the materials section.
 fn per_split(pm: &ProgressiveMesh, encode: fn(&ProgressiveMesh) -> Vec<u8>) -> f64 {
-    let bare = match pm.attributes().filter(|a| a.values.library.is_some()) {
-        Some(a) => {
-            let mut a = a.clone();
-            a.values.library = None;
-            ProgressiveMesh::from_parts(pm.base().clone(), pm.splits().to_vec())
-                .and_then(|p| p.with_attributes(a))
-                .expect("the same splits")
-        }
-        None => pm.clone(),
-    };
-    encode(&bare).len() as f64 / pm.levels().max(1) as f64
+    (encode(pm).len() - materials_section_len(pm)) as f64 / pm.levels().max(1) as f64
 }
 
 fn main() {

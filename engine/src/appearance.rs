@@ -47,17 +47,18 @@ fn spread(mut values: Vec<f64>) -> Option<Spread> {
     Some(Spread { mean, p95, max_sampled: values[values.len() - 1] })
 }
 
-/// Barycentric coordinates of `p` (on the triangle's plane) in triangle `t`.
-fn barycentric(p: DVec3, [a, b, c]: [DVec3; 3]) -> [f64; 3] {
+/// Barycentric coordinates of `p` projected onto the plane of triangle `t`; `None` for a
+/// degenerate triangle.
+pub(crate) fn barycentric(p: DVec3, [a, b, c]: [DVec3; 3]) -> Option<[f64; 3]> {
     let (v0, v1, v2) = (b - a, c - a, p - a);
     let (d00, d01, d11, d20, d21) = (v0.dot(v0), v0.dot(v1), v1.dot(v1), v2.dot(v0), v2.dot(v1));
     let denominator = d00 * d11 - d01 * d01;
     if denominator.abs() < f64::MIN_POSITIVE {
-        return [1.0, 0.0, 0.0];
+        return None;
     }
     let v = (d11 * d20 - d01 * d21) / denominator;
     let w = (d00 * d21 - d01 * d20) / denominator;
-    [1.0 - v - w, v, w]
+    Some([1.0 - v - w, v, w])
 }
 
 fn uv_at(mesh: &Mesh, f: usize, b: [f64; 3]) -> Option<DVec2> {
@@ -124,7 +125,7 @@ pub fn appearance_error(
                 continue;
             }
             let g = bvh.slot_face(slot) as usize;
-            let bq = barycentric(q, t);
+            let bq = barycentric(q, t).unwrap_or([1.0, 0.0, 0.0]);
             if let (Some(out), Some(inp)) = (uv_out, uv_at(input, g, bq)) {
                 best_uv = best_uv.min((out - inp).length() * texture_size);
             }

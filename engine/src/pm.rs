@@ -27,7 +27,7 @@ use crate::mesh::{CornerAttributes, Mesh};
 
 /// The per-corner attributes of a progressive mesh (Hoppe's wedges, as references): every value
 /// is one of the input's corners, so a level's corners are indices into `values`. Kept in memory
-/// by the simplifier's progressive mesh; the `.pm` file and the contract do not carry them yet.
+/// by the simplifier's progressive mesh and carried by the `.pm` file (versions 2 and 3).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PmAttributes {
     /// The values; the indices below point into them (one entry per value, every array present
@@ -465,48 +465,48 @@ impl Fans {
         ring
     }
 
-    /// Applies a split that adds vertex `vt` (the number of vertices before it) and its faces from
+    /// Applies the split of `vs` with `vl` and `vr` (or [`NO_VERTEX`]) that adds vertex `vt` (the
+    /// number of vertices before it) and its faces from
     /// face number `next_face` on, and fills [`Fans::moved`]. An error says why the split does not
     /// fit the mesh (the caller names the split).
-    pub fn split(&mut self, s: &VertexSplit, vt: u32, next_face: u32) -> Result<(), String> {
+    pub fn split(&mut self, [vs, vl, vr]: [u32; 3], vt: u32, next_face: u32) -> Result<(), String> {
         let valid = |v: u32| v == NO_VERTEX || v < vt;
-        if s.vs >= vt
-            || !valid(s.vl)
-            || !valid(s.vr)
-            || (s.vl == NO_VERTEX && s.vr == NO_VERTEX)
-            || s.vl == s.vs
-            || s.vr == s.vs
-            || (s.vl == s.vr)
+        if vs >= vt
+            || !valid(vl)
+            || !valid(vr)
+            || (vl == NO_VERTEX && vr == NO_VERTEX)
+            || vl == vs
+            || vr == vs
+            || (vl == vr)
         {
-            return Err(format!("vertex indices vs {} vl {} vr {} are invalid with {vt} vertices", s.vs, s.vl, s.vr));
+            return Err(format!("vertex indices vs {vs} vl {vl} vr {vr} are invalid with {vt} vertices"));
         }
-        let vs = s.vs;
         let limit = self.vertex_faces[vs as usize].len();
         self.moved.clear();
         // Faces from (vs, vr, ·) counter-clockwise to (vs, ·, vl) move to vt; with vr absent the
         // chain runs clockwise from (vs, ·, vl) to the boundary.
         // On a boundary edge the chain may be empty (vt was an ear with a single face).
-        if s.vr != NO_VERTEX {
-            let start = self.find_face(vs, |t| t[1] == s.vr);
+        if vr != NO_VERTEX {
+            let start = self.find_face(vs, |t| t[1] == vr);
             let mut f = match start {
                 Some(f) => f,
-                None if s.vl == NO_VERTEX => NO_VERTEX,
+                None if vl == NO_VERTEX => NO_VERTEX,
                 None => return Err("no face with edge vs→vr".into()),
             };
             while f != NO_VERTEX {
                 self.moved.push(f);
                 let z = rotate_to(self.triangles[f as usize], vs)[2];
-                if s.vl != NO_VERTEX && z == s.vl {
+                if vl != NO_VERTEX && z == vl {
                     break;
                 }
                 match self.find_face(vs, |t| t[1] == z) {
                     Some(next) if self.moved.len() < limit => f = next,
-                    None if s.vl == NO_VERTEX => break,
+                    None if vl == NO_VERTEX => break,
                     _ => return Err("the fan of vs does not lead from vr to vl".into()),
                 }
             }
         } else {
-            let mut f = self.find_face(vs, |t| t[2] == s.vl).unwrap_or(NO_VERTEX);
+            let mut f = self.find_face(vs, |t| t[2] == vl).unwrap_or(NO_VERTEX);
             while f != NO_VERTEX {
                 self.moved.push(f);
                 let y = rotate_to(self.triangles[f as usize], vs)[1];
@@ -527,7 +527,7 @@ impl Fans {
             self.vertex_faces[vt as usize].push(f);
         }
         let mut next_face = next_face;
-        for (present, t) in [(s.vl != NO_VERTEX, [vs, vt, s.vl]), (s.vr != NO_VERTEX, [vt, vs, s.vr])] {
+        for (present, t) in [(vl != NO_VERTEX, [vs, vt, vl]), (vr != NO_VERTEX, [vt, vs, vr])] {
             if present {
                 self.triangles[next_face as usize] = t;
                 for v in t {
@@ -656,7 +656,7 @@ impl<'p> LodCursor<'p> {
         let Some(s) = self.pm.splits.get(self.level) else { return Ok(()) };
         let vt = self.vertex_count() as u32;
         let first = self.face_count();
-        self.fans.split(s, vt, first as u32).map_err(|reason| self.corrupt(reason))?;
+        self.fans.split([s.vs, s.vl, s.vr], vt, first as u32).map_err(|reason| self.corrupt(reason))?;
         if let Some(a) = self.pm.attributes.as_ref().map(|a| &a.splits[self.level]) {
             for &f in &self.fans.moved {
                 let k = self.fans.triangles[f as usize].iter().position(|&v| v == vt).expect("moved to vt");

@@ -41,19 +41,6 @@ fn case_of(s: &VertexSplit) -> u64 {
     }
 }
 
-/// A topology-only split for [`Fans::split`].
-fn topology(vs: u32, vl: u32, vr: u32) -> VertexSplit {
-    VertexSplit {
-        vs,
-        vl,
-        vr,
-        new_position: [0.0; 3],
-        split_position: [0.0; 3],
-        collapsed_position: [0.0; 3],
-        error: 0.0,
-    }
-}
-
 /// The adaptive codes of the geometry stream, one per kind of number.
 #[derive(Default)]
 struct GeometryCodes {
@@ -119,7 +106,7 @@ pub(super) fn encode_geometry(out: &mut Vec<u8>, pm: &ProgressiveMesh, grid: &Gr
             Some(p) => codes.error.put_signed(&mut w, p as i64 - code as i64),
         }
         previous_error = Some(code);
-        fans.split(s, vt, pm.faces_at_level(j) as u32).expect("a ProgressiveMesh replays");
+        fans.split([s.vs, s.vl, s.vr], vt, pm.faces_at_level(j) as u32).expect("a ProgressiveMesh replays");
         at[s.vs as usize] = moved;
         at.push(new);
     }
@@ -218,13 +205,12 @@ pub(super) fn decode_geometry(
         let vr = neighbour(case != 1)?;
         let from = at[vs as usize];
         // Out-of-range deltas (a corrupt file) wrap and then fail the grid check; nothing overflows.
-        let top = (1i64 << grid.bits) - 1;
-        let on_grid = |q: &[i64; 3]| q.iter().all(|c| (0..=top).contains(c));
+        let fits = |q: &[i64; 3]| on_grid(&mut &q[..], 3, grid.bits).is_some();
         let mut new = [0i64; 3];
         for a in 0..3 {
             new[a] = from[a].wrapping_add(codes.new_vertex[a].get_signed(&mut b).map_err(cut)?);
         }
-        if !on_grid(&new) {
+        if !fits(&new) {
             return Err(bad("a position off the grid".into()));
         }
         let mut moved = from;
@@ -233,7 +219,7 @@ pub(super) fn decode_geometry(
                 let r = codes.moved_vertex[a].get_signed(&mut b).map_err(cut)?;
                 moved[a] = (from[a] - (new[a] - from[a]) / 2).wrapping_add(r);
             }
-            if !on_grid(&moved) {
+            if !fits(&moved) {
                 return Err(bad("a position off the grid".into()));
             }
         }
@@ -248,9 +234,8 @@ pub(super) fn decode_geometry(
             return Err(bad(format!("error code {code:#x} is not a finite error")));
         }
         previous_error = Some(code);
-        let split = topology(vs, vl, vr);
-        fans.split(&split, vt, faces).map_err(bad)?;
-        faces += split.added_faces() as u32;
+        fans.split([vs, vl, vr], vt, faces).map_err(bad)?;
+        faces += (vl != NO_VERTEX) as u32 + (vr != NO_VERTEX) as u32;
         at[vs as usize] = moved;
         at.push(new);
         splits.push(StreamedSplit {
@@ -270,19 +255,6 @@ pub(super) fn decode_geometry(
 
 /// A corner not given its value yet.
 const UNSET: u32 = u32::MAX;
-
-/// The values already at `x`'s corners, in the order of the faces around it.
-fn candidates(fans: &Fans, corners: &[[u32; 3]], x: u32, list: &mut Vec<u32>) {
-    list.clear();
-    for &f in &fans.vertex_faces[x as usize] {
-        let t = fans.triangles[f as usize];
-        let k = t.iter().position(|&v| v == x).expect("the face has the vertex");
-        let c = corners[f as usize][k];
-        if c != UNSET && !list.contains(&c) {
-            list.push(c);
-        }
-    }
-}
 
 /// What a value is made of, as grid integers: octahedral normal, texture coordinates, colour,
 /// material (−1 for none), those present.
@@ -335,6 +307,22 @@ impl AttributeState {
             kinds: layout.kinds(),
             list: Vec::new(),
             index: HashMap::new(),
+        }
+    }
+
+    /// Sets the candidates: the values already at `x`'s corners, in the order of the faces around
+    /// it, then `also` (a moved corner's value at `vs`) if it is not one of them.
+    fn gather(&mut self, fans: &Fans, x: u32, also: Option<u32>) {
+        self.list.clear();
+        for &f in &fans.vertex_faces[x as usize] {
+            let k = fans.triangles[f as usize].iter().position(|&v| v == x).expect("the face has the vertex");
+            let c = self.corners[f as usize][k];
+            if c != UNSET && !self.list.contains(&c) {
+                self.list.push(c);
+            }
+        }
+        if let Some(c) = also.filter(|c| !self.list.contains(c)) {
+            self.list.push(c);
         }
     }
 
@@ -413,8 +401,10 @@ pub(super) fn encode_attributes(
     if layout.normal {
         out.push(quantization.normal_bits);
     }
-    let uvs = quantization.uvs.filter(|_| layout.uv).expect_or(layout.uv);
-    let colors = quantization.colors.filter(|_| layout.color).expect_or(layout.color);
+    // The writer fits a grid for every attribute present.
+    let uvs = quantization.uvs.filter(|_| layout.uv);
+    let colors = quantization.colors.filter(|_| layout.color);
+    assert_eq!((uvs.is_some(), colors.is_some()), (layout.uv, layout.color), "a grid per attribute");
     if let Some(g) = &uvs {
         g.write(out, false);
     }
@@ -446,7 +436,7 @@ pub(super) fn encode_attributes(
     let mut w = BitWriter::default();
     for (f, t) in base.triangles.iter().enumerate() {
         for (k, &x) in t.iter().enumerate() {
-            candidates(&fans, &state.corners, x, &mut state.list);
+            state.gather(&fans, x, None);
             state.corners[f][k] = state.put(&mut w, value_of(a.base[f][k]));
         }
     }
@@ -454,14 +444,11 @@ pub(super) fn encode_attributes(
     for (j, (s, sa)) in pm.splits().iter().zip(&a.splits).enumerate() {
         let vt = (n0 + j) as u32;
         let first = pm.faces_at_level(j);
-        fans.split(s, vt, first as u32).expect("a ProgressiveMesh replays");
+        fans.split([s.vs, s.vl, s.vr], vt, first as u32).expect("a ProgressiveMesh replays");
         let moved = std::mem::take(&mut fans.moved);
         let olds = unset_moved(&fans, &mut state.corners, &moved, vt);
         for (&f, &(k, old)) in moved.iter().zip(&olds) {
-            candidates(&fans, &state.corners, vt, &mut state.list);
-            if !state.list.contains(&old) {
-                state.list.push(old);
-            }
+            state.gather(&fans, vt, Some(old));
             let value = match sa.moved.iter().find(|m| m.0 == f) {
                 Some(&(_, id)) => value_of(id),
                 None => state.table[old as usize].clone(),
@@ -472,7 +459,7 @@ pub(super) fn encode_attributes(
         for (slot, face) in (first..pm.faces_at_level(j + 1)).enumerate() {
             let t = fans.triangles[face];
             for (k, &x) in t.iter().enumerate() {
-                candidates(&fans, &state.corners, x, &mut state.list);
+                state.gather(&fans, x, None);
                 state.corners[face][k] = state.put(&mut w, value_of(sa.new_faces[slot][k]));
             }
         }
@@ -495,16 +482,11 @@ fn unset_moved(fans: &Fans, corners: &mut [[u32; 3]], moved: &[u32], vt: u32) ->
         .collect()
 }
 
-trait ExpectOr {
-    /// `self`, which must be present when `needed` (the writer fits a grid for every attribute).
-    fn expect_or(self, needed: bool) -> Self;
-}
-
-impl<T> ExpectOr for Option<T> {
-    fn expect_or(self, needed: bool) -> Self {
-        assert!(self.is_some() || !needed, "a grid for every attribute present");
-        self
-    }
+/// The next `n` integers of `rest`, moved past, if every one lies on a `bits` grid.
+fn on_grid<'q>(rest: &mut &'q [i64], n: usize, bits: u8) -> Option<&'q [i64]> {
+    let (head, tail) = rest.split_at(n);
+    *rest = tail;
+    head.iter().all(|c| (0..1i64 << bits).contains(c)).then_some(head)
 }
 
 /// Reads what [`encode_attributes`] wrote, replaying the splits of `pm` (already read).
@@ -542,7 +524,7 @@ pub(super) fn decode_attributes(
     let mut base_corners = Vec::with_capacity(base.face_count());
     for (f, t) in base.triangles.iter().enumerate() {
         for (k, &x) in t.iter().enumerate() {
-            candidates(&fans, &state.corners, x, &mut state.list);
+            state.gather(&fans, x, None);
             state.corners[f][k] = state
                 .get(&mut b)
                 .map_err(cut)?
@@ -556,15 +538,12 @@ pub(super) fn decode_attributes(
         let bad = |reason: String| MeshError::parse(path, format!("split {j} attributes"), reason);
         let vt = (n0 + j) as u32;
         let first = pm.faces_at_level(j);
-        fans.split(s, vt, first as u32).map_err(bad)?;
+        fans.split([s.vs, s.vl, s.vr], vt, first as u32).map_err(bad)?;
         let moved_faces = std::mem::take(&mut fans.moved);
         let olds = unset_moved(&fans, &mut state.corners, &moved_faces, vt);
         let mut moved = Vec::new();
         for (&f, &(k, old)) in moved_faces.iter().zip(&olds) {
-            candidates(&fans, &state.corners, vt, &mut state.list);
-            if !state.list.contains(&old) {
-                state.list.push(old);
-            }
+            state.gather(&fans, vt, Some(old));
             let value = state.get(&mut b).map_err(cut)?.map_err(bad)?;
             state.corners[f as usize][k] = value;
             if value != old {
@@ -576,7 +555,7 @@ pub(super) fn decode_attributes(
         for (slot, face) in (first..pm.faces_at_level(j + 1)).enumerate() {
             let t = fans.triangles[face];
             for (k, &x) in t.iter().enumerate() {
-                candidates(&fans, &state.corners, x, &mut state.list);
+                state.gather(&fans, x, None);
                 state.corners[face][k] = state.get(&mut b).map_err(cut)?.map_err(bad)?;
             }
             new_faces[slot] = state.corners[face];
@@ -598,28 +577,13 @@ pub(super) fn decode_attributes(
         let bad = |what: &str| MeshError::parse(path, format!("attribute value {t}"), format!("{what} off its grid"));
         let mut rest = &q[..];
         if let Some(n) = &mut values.normals {
-            let top = (1i64 << normal_bits) - 1;
-            if rest[..2].iter().any(|c| !(0..=top).contains(c)) {
-                return Err(bad("normal"));
-            }
-            n.push(from_octahedral(&rest[..2], normal_bits));
-            rest = &rest[2..];
+            n.push(from_octahedral(on_grid(&mut rest, 2, normal_bits).ok_or_else(|| bad("normal"))?, normal_bits));
         }
         if let (Some(u), Some(g)) = (&mut values.uvs, &uvs) {
-            let top = (1i64 << g.bits) - 1;
-            if rest[..2].iter().any(|c| !(0..=top).contains(c)) {
-                return Err(bad("texture coordinate"));
-            }
-            u.push(g.value(&rest[..2]));
-            rest = &rest[2..];
+            u.push(g.value(on_grid(&mut rest, 2, g.bits).ok_or_else(|| bad("texture coordinate"))?));
         }
         if let (Some(c), Some(g)) = (&mut values.colors, &colors) {
-            let top = (1i64 << g.bits) - 1;
-            if rest[..4].iter().any(|c| !(0..=top).contains(c)) {
-                return Err(bad("colour"));
-            }
-            c.push(g.value(&rest[..4]));
-            rest = &rest[4..];
+            c.push(g.value(on_grid(&mut rest, 4, g.bits).ok_or_else(|| bad("colour"))?));
         }
         if let Some(m) = &mut values.materials {
             let material = match rest[0] {

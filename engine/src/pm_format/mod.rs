@@ -110,6 +110,18 @@ fn finish(mut out: Vec<u8>, library: Option<&MaterialLibrary>) -> Vec<u8> {
     out
 }
 
+/// Bytes of the materials section (images inside) in `pm`'s file, whichever form: 0 without one.
+/// The rest of the file is the records.
+pub fn materials_section_len(pm: &ProgressiveMesh) -> usize {
+    let (_, library) = header(&mut Vec::new(), pm, false);
+    library.map_or(0, |library| {
+        let n = canonical(library_to_json(library)).to_string().len();
+        let mut length = Vec::new();
+        put_varint(&mut length, n as u64);
+        length.len() + n
+    })
+}
+
 /// Encodes a progressive mesh in the compact form (version 3) at the default [`Precision`], or
 /// on the grids it was read with when it came from a compact file (so that writing again gives
 /// the same bytes).

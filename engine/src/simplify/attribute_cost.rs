@@ -15,20 +15,7 @@
 use glam::DVec3;
 
 use super::kernel::{NONE, State};
-
-/// Barycentric coordinates of `p` projected onto the plane of (a, b, c); `None` for a degenerate
-/// triangle.
-fn barycentric(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> Option<[f64; 3]> {
-    let (v0, v1, v2) = (b - a, c - a, p - a);
-    let (d00, d01, d11, d20, d21) = (v0.dot(v0), v0.dot(v1), v1.dot(v1), v2.dot(v0), v2.dot(v1));
-    let det = d00 * d11 - d01 * d01;
-    if det.is_nan() || det <= 1e-300 {
-        return None;
-    }
-    let v = (d11 * d20 - d01 * d21) / det;
-    let w = (d00 * d21 - d01 * d20) / det;
-    Some([1.0 - v - w, v, w])
-}
+use crate::appearance::barycentric;
 
 impl State<'_> {
     /// The appearance term of collapsing `b` into `a` at `p` (0 without attributes, without
@@ -58,7 +45,7 @@ impl State<'_> {
                 let (x, y) = (corner.next, corner.prev);
                 let (px, py) = (self.point(x), self.point(y));
                 let area = 0.5 * (px - pv).cross(py - pv).length();
-                let Some(w) = barycentric(p, pv, px, py) else { continue };
+                let Some(w) = barycentric(p, [pv, px, py]) else { continue };
                 let f = corner.face;
                 let sv = self.source_at(f, v);
                 let (sx, sy) = (self.source_at(f, x), self.source_at(f, y));

@@ -268,11 +268,7 @@ impl<'o> State<'o> {
                 self.vertices[v as usize].kind = VertexKind::Anchored;
             }
         }
-        let (lo, hi) = mesh
-            .positions
-            .iter()
-            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(to_f64(p)), hi.max(to_f64(p))));
-        let diagonal2 = (hi - lo).length_squared();
+        let diagonal2 = mesh.bounds().map_or(0.0, |b| b.diagonal().powi(2));
         let w = self.options.attribute_weights;
         self.attribute_weights = [w.uv * diagonal2, w.normal * diagonal2, w.color * diagonal2];
         if !self.attribute_weights.iter().all(|w| w.is_finite()) {

@@ -88,17 +88,6 @@ pub fn assert_compact_round_trip(name: &str, pm: &meshlod_engine::pm::Progressiv
     for cut in [bytes.len() - 1, bytes.len() - 9, bytes.len() / 2, 30] {
         assert!(decode(&bytes[..cut], Path::new("cut.pm")).is_err(), "{name}: cut at {cut} was read");
     }
-    // The size of the records: the same file without its materials section (images inside).
-    let records = match pm.attributes().filter(|a| a.values.library.is_some()) {
-        Some(a) => {
-            let mut a = a.clone();
-            a.values.library = None;
-            let bare = meshlod_engine::pm::ProgressiveMesh::from_parts(pm.base().clone(), pm.splits().to_vec())
-                .and_then(|p| p.with_attributes(a))
-                .unwrap();
-            encode(&bare).len()
-        }
-        None => bytes.len(),
-    };
+    let records = bytes.len() - meshlod_engine::pm_format::materials_section_len(pm);
     (records as f64) / (pm.levels().max(1) as f64)
 }
