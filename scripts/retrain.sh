@@ -1,15 +1,26 @@
 #!/usr/bin/env bash
-# Retrain the predictor on your own meshes, in one command:
-#   bash scripts/retrain.sh [MESHES_DIR] [--per-mesh N]
-# samples (the engine) → training (torch) → ONNX export → onnxruntime check → model files in
-# predictor/model/ (predictor.onnx, metadata.json, golden.json) → Rust parity test.
+# Retrain the predictor, in one command:
+#   bash scripts/retrain.sh [MESH_DIR ...] [--per-mesh N] [--resume]
+# Without folders: the shared meshes and the corpus ($MESHLOD_MESHES, $MESHLOD_CORPUS; defaults
+# under ../shared). samples (the engine, resumable) → training with grouped cross-validation
+# (torch) → ONNX export → onnxruntime check → model files in predictor/model/ (predictor.onnx,
+# metadata.json, golden.json) → docs/predictor-report.md → Rust parity test.
 # Rebuild meshlod afterwards to embed the new model, or point `--model-dir` at predictor/model.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-meshes="${1:-${MESHLOD_MESHES:-../shared/meshes}}"
-shift || true
-per_mesh=40
-if [ "${1:-}" = "--per-mesh" ]; then per_mesh="$2"; fi
+dirs=()
+per_mesh=12
+resume=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --per-mesh) per_mesh="$2"; shift 2 ;;
+    --resume) resume=(--resume); shift ;;
+    *) dirs+=("$1"); shift ;;
+  esac
+done
+if [ ${#dirs[@]} -eq 0 ]; then
+  dirs=("${MESHLOD_MESHES:-../shared/meshes}" "${MESHLOD_CORPUS:-../shared/corpus}")
+fi
 
 if [ ! -x .venv-train/bin/python ]; then
   python3 -m venv .venv-train
@@ -18,8 +29,9 @@ fi
 
 cargo build --release --locked --bin meshlod
 mkdir -p training/data
-target/release/meshlod samples --meshes "$meshes" --out training/data/samples.csv --per-mesh "$per_mesh"
+target/release/meshlod samples --meshes "${dirs[@]}" --out training/data/samples.csv \
+  --per-mesh "$per_mesh" --etc-per-mesh 6 "${resume[@]}"
 .venv-train/bin/python training/train.py --samples training/data/samples.csv --out predictor/model
 .venv-train/bin/python training/report.py --model predictor/model --samples training/data/samples.csv
 cargo test --release --locked -p meshlod-predictor
-echo "retrained: see predictor/model/metadata.json for the evaluation"
+echo "retrained: see docs/predictor-report.md and predictor/model/metadata.json"

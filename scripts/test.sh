@@ -86,6 +86,8 @@ fi
 .venv-train/bin/pip install --quiet --disable-pip-version-check -r training/requirements.txt
 model_dir=$(mktemp -d)
 .venv-train/bin/python training/train.py --quick --samples training/data/samples.csv --out "$model_dir"
+.venv-train/bin/python training/report.py --model "$model_dir" --report "$model_dir/report.md"
+grep -q "Grouped cross-validation" "$model_dir/report.md"
 # The freshly exported model, loaded by tract, reproduces torch's golden outputs.
 MESHLOD_MODEL_DIR="$model_dir" cargo test --workspace --locked --lib -- model_matches_its_golden_outputs
 "$MESHLOD" generate blob -o "$model_dir/blob.obj" --resolution 16

@@ -302,6 +302,79 @@ fn batch_runs_jobs_reports_each_and_resumes() {
 }
 
 #[test]
+fn samples_read_several_folders_skip_bad_meshes_and_resume() {
+    let dir = tempdir("samples");
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    std::fs::create_dir_all(&a).unwrap();
+    std::fs::create_dir_all(&b).unwrap();
+    assert!(meshlod(&["generate", "torus", "-o", s(&a.join("torus.obj")), "--resolution", "8"]).status.success());
+    assert!(meshlod(&["generate", "blob", "-o", s(&b.join("blob.ply")), "--resolution", "8"]).status.success());
+    std::fs::write(b.join("broken.obj"), "v 0 0 0\nv 1 0 0\nf 1 2 9\n").unwrap();
+    let out_csv = dir.join("samples.csv");
+    let run = |only: &[&str], resume: bool| {
+        let mut args = vec!["samples", "--meshes", s(&a), s(&b), "--out", s(&out_csv), "--per-mesh", "2"];
+        args.extend_from_slice(&["--etc-per-mesh", "1"]);
+        if !only.is_empty() {
+            args.push("--only");
+            args.extend_from_slice(only);
+        }
+        if resume {
+            args.push("--resume");
+        }
+        let out = meshlod(&args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let rows = |path: &Path| std::fs::read_to_string(path).unwrap().lines().map(str::to_owned).collect::<Vec<_>>();
+    let stderr = run(&["torus", "broken"], false);
+    assert!(stderr.contains("skipping broken") && stderr.contains("vertex 9"), "{stderr}");
+    let first = rows(&out_csv);
+    assert_eq!(first.len(), 3, "{first:?}");
+    let header: Vec<&str> = first[0].split(',').collect();
+    let errors: Vec<usize> = (0..header.len()).filter(|&i| header[i].starts_with("error_w")).collect();
+    assert_eq!(errors.len(), 5);
+    for row in &first[1..] {
+        let cells: Vec<&str> = row.split(',').collect();
+        assert_eq!(cells[0], "torus");
+        let e: Vec<f64> = errors.iter().map(|&i| cells[i].parse().unwrap()).collect();
+        assert!(e.iter().all(|v| v.is_finite() && *v > 0.0), "{row}");
+        let best: f64 = cells.last().unwrap().parse().unwrap();
+        let k = [0.0, 0.5, 1.0, 1.5, 2.0].iter().position(|w| *w == best).unwrap();
+        assert!(e.iter().all(|v| e[k] <= *v), "best_w is the lowest error: {row}");
+    }
+    assert_eq!(rows(&dir.join("samples.etc.csv")).len(), 3);
+    // Resuming keeps the rows there and adds only the mesh they lack.
+    let stderr = run(&[], true);
+    assert!(stderr.contains("1 meshes done"), "{stderr}");
+    let second = rows(&out_csv);
+    assert_eq!(second[..3], first[..]);
+    assert_eq!(second.len(), 5);
+    assert!(second[3].starts_with("blob,") && second[4].starts_with("blob,"));
+    let provenance: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("samples.meta.json")).unwrap()).unwrap();
+    assert!(
+        provenance["seconds"].as_f64().unwrap() > 0.0
+            && provenance["command"].as_str().unwrap().contains("--per-mesh 2")
+    );
+    // --refeature rewrites the feature columns from the meshes and keeps every measured column.
+    let measured = |line: &str| line.split(',').rev().take(6).map(str::to_owned).collect::<Vec<_>>();
+    let mut tampered = second.clone();
+    let mut cells: Vec<&str> = second[1].split(',').collect();
+    cells[4] = "7"; // a feature column (log10_faces_target)
+    tampered[1] = cells.join(",");
+    std::fs::write(&out_csv, tampered.join("\n") + "\n").unwrap();
+    let refeatured = {
+        let out = meshlod(&["samples", "--meshes", s(&a), s(&b), "--out", s(&out_csv), "--refeature"]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        rows(&out_csv)
+    };
+    assert_eq!(refeatured, second, "the features come back as the engine computes them");
+    assert!(second.iter().zip(&refeatured).all(|(a, b)| measured(a) == measured(b)));
+    fails_with(&["samples", "--meshes", s(&a), "--out", s(&out_csv), "--refeature"], "blob");
+    fails_with(&["samples", "--meshes", s(&a), "--out", s(&out_csv), "--per-mesh", "0"], "--per-mesh");
+}
+
+#[test]
 fn stl_and_off_inputs_are_read_and_outputs_are_refused() {
     let dir = tempdir("stl-off");
     let obj = dir.join("torus.obj");

@@ -13,8 +13,14 @@ use glam::DVec3;
 use crate::mesh::Mesh;
 use crate::topology::Topology;
 
+/// How many shape features there are.
+pub const SHAPE_FEATURES: usize = 8;
+
+/// The shape features of one mesh, in the order of [`SHAPE_FEATURE_NAMES`].
+pub type Shape = [f32; SHAPE_FEATURES];
+
 /// Names of [`shape_features`], in order.
-pub const SHAPE_FEATURE_NAMES: [&str; 8] = [
+pub const SHAPE_FEATURE_NAMES: [&str; SHAPE_FEATURES] = [
     "dihedral_mean",
     "dihedral_std",
     "sharp_edge_share",
@@ -26,10 +32,11 @@ pub const SHAPE_FEATURE_NAMES: [&str; 8] = [
 ];
 
 /// Names of the w classifier's inputs ([`w_input`]), in order: counts and ratio, then the shape.
-pub const W_INPUT_NAMES: [&str; 11] = join(["log10_faces_in", "log10_faces_target", "ratio"], SHAPE_FEATURE_NAMES);
+pub const W_INPUT_NAMES: [&str; SHAPE_FEATURES + 3] =
+    join(["log10_faces_in", "log10_faces_target", "ratio"], SHAPE_FEATURE_NAMES);
 
 /// Names of the ETC regressor's inputs ([`etc_input`]), in order: the shape, then the mode and size.
-pub const ETC_INPUT_NAMES: [&str; 10] = join(SHAPE_FEATURE_NAMES, ["subdivide", "log2_face_ratio"]);
+pub const ETC_INPUT_NAMES: [&str; SHAPE_FEATURES + 2] = join(SHAPE_FEATURE_NAMES, ["subdivide", "log2_face_ratio"]);
 
 /// `head` followed by `tail`, so the input-name lists are built from [`SHAPE_FEATURE_NAMES`] and
 /// cannot drift from it.
@@ -73,7 +80,7 @@ fn mean_and_cv(values: impl Iterator<Item = f64>) -> (f64, f64) {
 }
 
 /// The shape features of a mesh, in the order of [`SHAPE_FEATURE_NAMES`]. Scale-invariant.
-pub fn shape_features(mesh: &Mesh) -> [f32; 8] {
+pub fn shape_features(mesh: &Mesh) -> Shape {
     let topology = Topology::new(mesh);
     let normals: Vec<DVec3> = (0..mesh.face_count()).map(|f| mesh.face_area_vector(f).normalize_or_zero()).collect();
     let cos_sharp = SHARP_EDGE_DEGREES.to_radians().cos();
@@ -132,10 +139,10 @@ pub fn shape_features(mesh: &Mesh) -> [f32; 8] {
 }
 
 /// The w classifier's input for simplifying `faces_in` faces to `target_faces`.
-pub fn w_input(shape: &[f32; 8], faces_in: usize, target_faces: usize) -> [f32; 11] {
+pub fn w_input(shape: &Shape, faces_in: usize, target_faces: usize) -> [f32; SHAPE_FEATURES + 3] {
     let faces_in = faces_in.max(1) as f64;
     let target = target_faces.max(1) as f64;
-    let mut x = [0f32; 11];
+    let mut x = [0f32; SHAPE_FEATURES + 3];
     x[0] = faces_in.log10() as f32;
     x[1] = target.log10() as f32;
     x[2] = (1.0 - target / faces_in) as f32;
@@ -145,11 +152,11 @@ pub fn w_input(shape: &[f32; 8], faces_in: usize, target_faces: usize) -> [f32; 
 
 /// The ETC regressor's input for reaching `target_faces` from `faces_in` by subdividing or
 /// simplifying.
-pub fn etc_input(shape: &[f32; 8], subdivide: bool, faces_in: usize, target_faces: usize) -> [f32; 10] {
-    let mut x = [0f32; 10];
-    x[..8].copy_from_slice(shape);
-    x[8] = if subdivide { 1.0 } else { 0.0 };
-    x[9] = (target_faces.max(1) as f64 / faces_in.max(1) as f64).log2() as f32;
+pub fn etc_input(shape: &Shape, subdivide: bool, faces_in: usize, target_faces: usize) -> [f32; SHAPE_FEATURES + 2] {
+    let mut x = [0f32; SHAPE_FEATURES + 2];
+    x[..SHAPE_FEATURES].copy_from_slice(shape);
+    x[SHAPE_FEATURES] = if subdivide { 1.0 } else { 0.0 };
+    x[SHAPE_FEATURES + 1] = (target_faces.max(1) as f64 / faces_in.max(1) as f64).log2() as f32;
     x
 }
 
@@ -161,7 +168,7 @@ mod tests {
     #[test]
     fn names_and_inputs_agree() {
         assert_eq!(&W_INPUT_NAMES[3..], &SHAPE_FEATURE_NAMES[..]);
-        assert_eq!(&ETC_INPUT_NAMES[..8], &SHAPE_FEATURE_NAMES[..]);
+        assert_eq!(&ETC_INPUT_NAMES[..SHAPE_FEATURES], &SHAPE_FEATURE_NAMES[..]);
     }
 
     #[test]

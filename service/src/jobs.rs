@@ -10,7 +10,7 @@
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
-use meshlod_engine::features::{SHAPE_FEATURE_NAMES, W_CLASSES, shape_features};
+use meshlod_engine::features::{SHAPE_FEATURE_NAMES, SHAPE_FEATURES, Shape, W_CLASSES, shape_features};
 use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
 use meshlod_engine::refine::{RefineMode, RefineOptions, Refined, refine as engine_refine};
 use meshlod_engine::simplify::{Metric, NormalUpdate, Simplified, SimplifyOptions, simplify as engine_simplify};
@@ -239,7 +239,7 @@ pub fn refine(
 /// [`SimplifyOptions::face_target`] has it).
 pub fn predict(
     predictor: &Predictor,
-    shape: &[f32; 8],
+    shape: &Shape,
     faces_in: usize,
     target_faces: Option<u32>,
     target_ratio: Option<f64>,
@@ -278,10 +278,10 @@ pub fn predict_mesh(
 }
 
 /// The shape features a Predict request carries instead of a mesh, checked.
-pub fn features_from_proto(f: &proto::ShapeFeatures) -> Result<[f32; 8], Status> {
-    let shape: [f32; 8] = f.values.as_slice().try_into().map_err(|_| {
+pub fn features_from_proto(f: &proto::ShapeFeatures) -> Result<Shape, Status> {
+    let shape: Shape = f.values.as_slice().try_into().map_err(|_| {
         Status::invalid_argument(format!(
-            "features.values: expected the 8 shape features {SHAPE_FEATURE_NAMES:?}, got {} values",
+            "features.values: expected the {SHAPE_FEATURES} shape features {SHAPE_FEATURE_NAMES:?}, got {} values",
             f.values.len()
         ))
     })?;

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use meshlod_engine::Mesh;
-use meshlod_engine::features::{ETC_INPUT_NAMES, W_INPUT_NAMES, etc_input, shape_features, w_input};
+use meshlod_engine::features::{ETC_INPUT_NAMES, Shape, W_INPUT_NAMES, etc_input, shape_features, w_input};
 use meshlod_predictor::{Predictor, PredictorError, WPrediction};
 
 /// What the predictor advises for one mesh and target.
@@ -33,7 +33,7 @@ pub fn load(dir: Option<&Path>) -> Result<Predictor, PredictorError> {
 /// Advice from precomputed shape features.
 pub fn advise_features(
     predictor: &Predictor,
-    shape: &[f32; 8],
+    shape: &Shape,
     faces_in: usize,
     target_faces: usize,
 ) -> Result<Advice, PredictorError> {

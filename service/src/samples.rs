@@ -6,13 +6,17 @@
 //! comes from the progressive mesh (a few splits away from the previous one) rather than from a
 //! new simplification. Each row keeps the Hausdorff error of **all five** w, so regret can be
 //! measured. ETC rows pair a target (mode, face ratio) with the exact ETC the refine search finds.
+//!
+//! Several folders may be given (the shared meshes and the corpus). Rows are written a mesh at a
+//! time, so `--resume` continues an interrupted run: meshes already in both files are skipped. A
+//! mesh the engine refuses (or that fails to simplify) is reported and skipped, never fatal.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use meshlod_engine::features::{ETC_INPUT_NAMES, W_CLASSES, W_INPUT_NAMES, etc_input, shape_features, w_input};
+use meshlod_engine::features::{ETC_INPUT_NAMES, Shape, W_CLASSES, W_INPUT_NAMES, etc_input, shape_features, w_input};
 use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
 use meshlod_engine::io::read_mesh;
 use meshlod_engine::refine::{RefineMode, RefineOptions, refine};
@@ -22,9 +26,9 @@ use meshlod_engine::simplify::{Metric, SimplifyOptions, prepare, simplify};
 /// `meshlod samples` flags.
 #[derive(Debug, Args)]
 pub(crate) struct SamplesArgs {
-    /// Folder of meshes (.obj / .ply).
-    #[arg(long)]
-    meshes: PathBuf,
+    /// Folders of meshes (.obj, .ply, .stl, .off); repeat the flag or list several.
+    #[arg(long, num_args = 1.., required = true)]
+    meshes: Vec<PathBuf>,
     /// Output CSV of w samples; the ETC samples go next to it with `.etc.csv`.
     #[arg(long)]
     out: PathBuf,
@@ -40,6 +44,16 @@ pub(crate) struct SamplesArgs {
     /// Only these meshes (file stems).
     #[arg(long, num_args = 1..)]
     only: Vec<String>,
+    /// Weight of the distance guard in every simplification (0: off, as the default simplify).
+    #[arg(long, default_value_t = 0.0)]
+    guard: f64,
+    /// Keep the rows already in the output files and add only the meshes they lack.
+    #[arg(long)]
+    resume: bool,
+    /// Rewrite the feature columns of the rows already in the output files from their meshes
+    /// (after a change to the shape features), keeping their errors and ETCs; measures nothing.
+    #[arg(long, conflicts_with = "resume")]
+    refeature: bool,
 }
 
 /// Highest ratio sampled (the paper stops below 1.0; 0.995 keeps 0.5%).
@@ -49,104 +63,278 @@ fn seed_for(seed: u64, name: &str) -> u64 {
     name.bytes().fold(seed ^ 0x9E37_79B9_7F4A_7C15, |h, b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
 }
 
-fn mesh_files(dir: &Path, only: &[String]) -> Result<Vec<(String, PathBuf)>> {
-    let mut files: Vec<(String, PathBuf)> = std::fs::read_dir(dir)
-        .with_context(|| format!("reading {}", dir.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| meshlod_engine::io::MeshFormat::from_extension(p).is_some())
-        .map(|p| (p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(), p))
-        .filter(|(name, _)| only.is_empty() || only.contains(name))
-        .collect();
+fn mesh_files(dirs: &[PathBuf], only: &[String]) -> Result<Vec<(String, PathBuf)>> {
+    let mut files = Vec::new();
+    for dir in dirs {
+        for entry in std::fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))? {
+            let path = entry?.path();
+            // glTF scenes are left out: the samples are about positions, and the folders hold them as OBJ/PLY.
+            let format = meshlod_engine::io::MeshFormat::from_extension(&path);
+            if format.is_none() || matches!(format, Some(meshlod_engine::io::MeshFormat::Gltf)) {
+                continue;
+            }
+            let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            if only.is_empty() || only.contains(&name) {
+                files.push((name, path));
+            }
+        }
+    }
     files.sort();
+    if let Some(w) = files.windows(2).find(|w| w[0].0 == w[1].0) {
+        bail!(
+            "two meshes named {} ({} and {}): sample rows are keyed by name",
+            w[0].0,
+            w[0].1.display(),
+            w[1].1.display()
+        );
+    }
     if files.is_empty() {
-        bail!("no .obj, .ply, .stl or .off meshes in {}", dir.display());
+        let dirs: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
+        bail!("no .obj, .ply, .stl or .off meshes in {}", dirs.join(", "));
     }
     Ok(files)
 }
 
+/// The meshes with rows in `path` (the first column after the header); empty when it does not exist.
+fn meshes_in(path: &Path) -> Result<std::collections::BTreeSet<String>> {
+    match std::fs::read_to_string(path) {
+        Ok(text) => Ok(text.lines().skip(1).filter_map(|l| l.split(',').next()).map(str::to_owned).collect()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Default::default()),
+        Err(e) => Err(e).with_context(|| format!("reading {}", path.display())),
+    }
+}
+
+/// Opens `path` for rows: appended to when resuming and it has a header already, else created
+/// with `header`.
+fn open_rows(path: &Path, header: &str, resume: bool) -> Result<std::io::BufWriter<std::fs::File>> {
+    let keep = resume && std::fs::read_to_string(path).is_ok_and(|t| t.lines().next() == Some(header));
+    if resume && !keep && path.exists() {
+        bail!("{} does not start with the header this version writes; cannot resume into it", path.display());
+    }
+    let file = if keep { std::fs::OpenOptions::new().append(true).open(path) } else { std::fs::File::create(path) }
+        .with_context(|| format!("opening {}", path.display()))?;
+    let mut out = std::io::BufWriter::new(file);
+    if !keep {
+        writeln!(out, "{header}")?;
+    }
+    Ok(out)
+}
+
 /// Generates both sample files.
 pub(crate) fn run(args: SamplesArgs) -> Result<()> {
-    let files = mesh_files(&args.meshes, &args.only)?;
+    if args.per_mesh == 0 {
+        bail!("--per-mesh must be at least 1");
+    }
+    if !(args.guard.is_finite() && args.guard >= 0.0) {
+        bail!("--guard {} must be a finite number ≥ 0", args.guard);
+    }
+    let mut files = mesh_files(&args.meshes, &args.only)?;
     let etc_path = args.out.with_extension("etc.csv");
-    let mut w_out = std::io::BufWriter::new(
-        std::fs::File::create(&args.out).with_context(|| format!("creating {}", args.out.display()))?,
-    );
-    let mut etc_out = std::io::BufWriter::new(
-        std::fs::File::create(&etc_path).with_context(|| format!("creating {}", etc_path.display()))?,
-    );
     let errors: Vec<String> = W_CLASSES.iter().map(|w| format!("error_w{w}")).collect();
-    writeln!(w_out, "mesh,faces_in,target_faces,{},{},best_w", W_INPUT_NAMES.join(","), errors.join(","))?;
-    writeln!(etc_out, "mesh,faces_in,target_faces,faces_out,{},etc", ETC_INPUT_NAMES.join(","))?;
+    let w_header = format!("mesh,faces_in,target_faces,{},{},best_w", W_INPUT_NAMES.join(","), errors.join(","));
+    let etc_header = format!("mesh,faces_in,target_faces,faces_out,{},etc", ETC_INPUT_NAMES.join(","));
+    if args.refeature {
+        return refeature(&files, &args.out, &etc_path, &w_header, &etc_header);
+    }
+    if args.resume {
+        let done = meshes_in(&args.out)?;
+        let etc_done = meshes_in(&etc_path)?;
+        files.retain(|(name, _)| !(done.contains(name) && etc_done.contains(name)));
+        if done.iter().any(|m| !etc_done.contains(m)) || etc_done.iter().any(|m| !done.contains(m)) {
+            bail!(
+                "{} and {} hold different meshes; resume needs both written together",
+                args.out.display(),
+                etc_path.display()
+            );
+        }
+        eprintln!("resuming: {} meshes done, {} to go", done.len(), files.len());
+    }
+    let started = std::time::Instant::now();
+    let mut w_out = open_rows(&args.out, &w_header, args.resume)?;
+    let mut etc_out = open_rows(&etc_path, &etc_header, args.resume)?;
     let total = files.len() * (W_CLASSES.len() * args.per_mesh + 2 * args.etc_per_mesh);
     let progress = indicatif::ProgressBar::new(total as u64).with_style(
         indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} samples, {elapsed}/{eta} {msg}")
             .expect("template"),
     );
+    let mut skipped = Vec::new();
     for (name, path) in &files {
         progress.set_message(name.clone());
-        let mesh = prepare(&read_mesh(path)?).0;
-        let faces_in = mesh.face_count();
-        let shape = shape_features(&mesh);
-        let mut rng = SplitMix64::new(seed_for(args.seed, name));
-        let mut targets: Vec<usize> = (0..args.per_mesh)
-            .map(|_| {
-                let ratio = 0.5 + (MAX_RATIO - 0.5) * rng.next_f64();
-                (((1.0 - ratio) * faces_in as f64).round() as usize).max(4)
-            })
-            .collect();
-        targets.sort_unstable();
-        // errors[i][k]: Hausdorff of target i with class k.
-        let mut errors = vec![[f64::NAN; 5]; targets.len()];
-        for (k, &w) in W_CLASSES.iter().enumerate() {
-            let options = SimplifyOptions {
-                target_faces: Some(targets[0]),
-                target_ratio: None,
-                metric: Metric::Qfvp { w },
-                record_progressive: true,
-                ..Default::default()
-            };
-            let result = simplify(&mesh, &options)?;
-            let pm = result.progressive.expect("recorded");
-            let mut cursor = pm.cursor();
-            for (i, &target) in targets.iter().enumerate() {
-                cursor.seek_faces(target)?;
-                let level = cursor.mesh();
-                errors[i][k] = hausdorff(&mesh, &level, &HausdorffOptions::default())?.hausdorff;
-                progress.inc(1);
+        match mesh_rows(&args, name, path, &progress) {
+            Ok((w_rows, etc_rows)) => {
+                // Both files get a mesh's rows together, so an interrupted run resumes cleanly.
+                w_out.write_all(w_rows.as_bytes())?;
+                etc_out.write_all(etc_rows.as_bytes())?;
+                w_out.flush()?;
+                etc_out.flush()?;
+            }
+            Err(e) => {
+                progress.suspend(|| eprintln!("skipping {name}: {e:#}"));
+                skipped.push(name.clone());
             }
         }
-        for (i, &target) in targets.iter().enumerate() {
-            let x = w_input(&shape, faces_in, target);
-            let best = (0..5).min_by(|&a, &b| errors[i][a].total_cmp(&errors[i][b])).expect("five");
-            let xs: Vec<String> = x.iter().map(|v| v.to_string()).collect();
-            let es: Vec<String> = errors[i].iter().map(|v| format!("{v:.9}")).collect();
-            writeln!(w_out, "{name},{faces_in},{target},{},{},{}", xs.join(","), es.join(","), W_CLASSES[best])?;
-        }
-        for subdivide in [true, false] {
-            for _ in 0..args.etc_per_mesh {
-                let factor = if subdivide { 1.05 + 2.85 * rng.next_f64() } else { 0.3 + 0.65 * rng.next_f64() };
-                let target = ((faces_in as f64 * factor).round() as usize).max(4);
-                let mode = if subdivide { RefineMode::Subdivide } else { RefineMode::Simplify };
-                let r = refine(
-                    &mesh,
-                    &RefineOptions { etc: None, target_faces: Some(target), mode, ..Default::default() },
-                )?;
-                let x = etc_input(&shape, subdivide, faces_in, target);
-                let xs: Vec<String> = x.iter().map(|v| v.to_string()).collect();
-                writeln!(
-                    etc_out,
-                    "{name},{faces_in},{target},{},{},{:.9}",
-                    r.stats.faces_out,
-                    xs.join(","),
-                    r.stats.etc
-                )?;
-                progress.inc(1);
-            }
-        }
-        w_out.flush()?;
-        etc_out.flush()?;
     }
     progress.finish_with_message("done");
+    write_provenance(&args, started.elapsed().as_secs_f64())?;
     eprintln!("wrote {} and {}", args.out.display(), etc_path.display());
+    if !skipped.is_empty() {
+        eprintln!("{} meshes skipped: {}", skipped.len(), skipped.join(", "));
+    }
+    Ok(())
+}
+
+/// The w rows and the ETC rows of one mesh, as CSV text.
+fn mesh_rows(
+    args: &SamplesArgs,
+    name: &str,
+    path: &Path,
+    progress: &indicatif::ProgressBar,
+) -> Result<(String, String)> {
+    use std::fmt::Write as _;
+    let (mut w_rows, mut etc_rows) = (String::new(), String::new());
+    let mesh = prepare(&read_mesh(path)?).0;
+    let faces_in = mesh.face_count();
+    let shape = shape_features(&mesh);
+    let mut rng = SplitMix64::new(seed_for(args.seed, name));
+    let mut targets: Vec<usize> = (0..args.per_mesh)
+        .map(|_| {
+            let ratio = 0.5 + (MAX_RATIO - 0.5) * rng.next_f64();
+            (((1.0 - ratio) * faces_in as f64).round() as usize).max(4)
+        })
+        .collect();
+    targets.sort_unstable();
+    // errors[i][k]: Hausdorff of target i with class k.
+    let mut errors = vec![[f64::NAN; 5]; targets.len()];
+    for (k, &w) in W_CLASSES.iter().enumerate() {
+        let options = SimplifyOptions {
+            target_faces: Some(targets[0]),
+            target_ratio: None,
+            metric: Metric::Qfvp { w },
+            record_progressive: true,
+            guard: args.guard,
+            ..Default::default()
+        };
+        let result = simplify(&mesh, &options)?;
+        let pm = result.progressive.context("the simplifier returned no progressive mesh")?;
+        let mut cursor = pm.cursor();
+        for (i, &target) in targets.iter().enumerate() {
+            cursor.seek_faces(target)?;
+            let level = cursor.mesh();
+            errors[i][k] = hausdorff(&mesh, &level, &HausdorffOptions::default())?.hausdorff;
+            progress.inc(1);
+        }
+    }
+    for (i, &target) in targets.iter().enumerate() {
+        let x = w_input(&shape, faces_in, target);
+        let best = (0..5).min_by(|&a, &b| errors[i][a].total_cmp(&errors[i][b])).expect("five");
+        let xs: Vec<String> = x.iter().map(|v| v.to_string()).collect();
+        let es: Vec<String> = errors[i].iter().map(|v| format!("{v:.9}")).collect();
+        writeln!(w_rows, "{name},{faces_in},{target},{},{},{}", xs.join(","), es.join(","), W_CLASSES[best])?;
+    }
+    for subdivide in [true, false] {
+        for _ in 0..args.etc_per_mesh {
+            let factor = if subdivide { 1.05 + 2.85 * rng.next_f64() } else { 0.3 + 0.65 * rng.next_f64() };
+            let target = ((faces_in as f64 * factor).round() as usize).max(4);
+            let mode = if subdivide { RefineMode::Subdivide } else { RefineMode::Simplify };
+            let r =
+                refine(&mesh, &RefineOptions { etc: None, target_faces: Some(target), mode, ..Default::default() })?;
+            let x = etc_input(&shape, subdivide, faces_in, target);
+            let xs: Vec<String> = x.iter().map(|v| v.to_string()).collect();
+            writeln!(etc_rows, "{name},{faces_in},{target},{},{},{:.9}", r.stats.faces_out, xs.join(","), r.stats.etc)?;
+            progress.inc(1);
+        }
+    }
+    Ok((w_rows, etc_rows))
+}
+
+/// `<out>.meta.json`: how the samples were made (the command, the time it took, summed over resumed
+/// runs), for the predictor report.
+fn write_provenance(args: &SamplesArgs, seconds: f64) -> Result<()> {
+    let path = args.out.with_extension("meta.json");
+    let before = if args.resume {
+        std::fs::read_to_string(&path)
+            .ok()
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+            .and_then(|v| v["seconds"].as_f64())
+            .unwrap_or(0.0)
+    } else {
+        0.0
+    };
+    let dirs: Vec<String> = args.meshes.iter().map(|d| d.display().to_string()).collect();
+    let mut command = format!(
+        "meshlod samples --meshes {} --per-mesh {} --etc-per-mesh {} --seed {}",
+        dirs.join(" "),
+        args.per_mesh,
+        args.etc_per_mesh,
+        args.seed
+    );
+    if args.guard > 0.0 {
+        command += &format!(" --guard {}", args.guard);
+    }
+    let value = serde_json::json!({
+        "command": command,
+        "seconds": before + seconds,
+        "threads": std::thread::available_parallelism().map_or(1, |n| n.get()),
+        "version": env!("CARGO_PKG_VERSION"),
+    });
+    std::fs::write(&path, serde_json::to_string_pretty(&value)? + "\n")
+        .with_context(|| format!("writing {}", path.display()))
+}
+
+/// `--refeature`: the rows of both files with their feature columns computed anew.
+fn refeature(
+    files: &[(String, PathBuf)],
+    w_path: &Path,
+    etc_path: &Path,
+    w_header: &str,
+    etc_header: &str,
+) -> Result<()> {
+    let mut shapes = std::collections::HashMap::new();
+    let mut shape_of = |name: &str| -> Result<Shape> {
+        if let Some(shape) = shapes.get(name) {
+            return Ok(*shape);
+        }
+        let path = files.iter().find(|(n, _)| n == name).map(|(_, p)| p);
+        let path = path.with_context(|| format!("mesh {name} of the samples is not in the --meshes folders"))?;
+        let shape = shape_features(&prepare(&read_mesh(path)?).0);
+        shapes.insert(name.to_owned(), shape);
+        Ok(shape)
+    };
+    for (path, header, etc) in [(w_path, w_header, false), (etc_path, etc_header, true)] {
+        let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        let mut lines = text.lines();
+        let old: Vec<&str> = lines.next().context("no header")?.split(',').collect();
+        // The old feature columns: after the counts, up to the errors (w) or the ETC (etc).
+        let first = if etc { 4 } else { 3 };
+        let end = if etc {
+            old.len() - 1
+        } else {
+            old.iter().position(|h| h.starts_with("error_w")).context("no error columns")?
+        };
+        let subdivide = old.iter().position(|h| *h == "subdivide");
+        let mut out = format!("{header}\n");
+        for (i, line) in lines.enumerate() {
+            let cells: Vec<&str> = line.split(',').collect();
+            if cells.len() != old.len() {
+                bail!("{} line {}: {} cells, the header has {}", path.display(), i + 2, cells.len(), old.len());
+            }
+            let number = |k: usize| -> Result<f64> {
+                cells[k]
+                    .parse()
+                    .with_context(|| format!("{} line {}: {:?} is not a number", path.display(), i + 2, cells[k]))
+            };
+            let shape = shape_of(cells[0])?;
+            let (faces_in, target) = (number(1)? as usize, number(2)? as usize);
+            let x: Vec<String> = if etc {
+                let subdivide = number(subdivide.context("no subdivide column")?)? > 0.5;
+                etc_input(&shape, subdivide, faces_in, target).iter().map(|v| v.to_string()).collect()
+            } else {
+                w_input(&shape, faces_in, target).iter().map(|v| v.to_string()).collect()
+            };
+            out += &format!("{},{},{}\n", cells[..first].join(","), x.join(","), cells[end..].join(","));
+        }
+        std::fs::write(path, out).with_context(|| format!("writing {}", path.display()))?;
+    }
+    eprintln!("rewrote the features of {} and {} ({} meshes)", w_path.display(), etc_path.display(), shapes.len());
     Ok(())
 }
