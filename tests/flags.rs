@@ -64,6 +64,62 @@ fn client_honours_every_flag_and_reports_as_local_does() {
 }
 
 #[test]
+fn client_sends_and_gets_back_materials() {
+    let dir = tempdir("client-materials");
+    let plain = dir.join("plain.obj");
+    ok(&["generate", "torus", "-o", s(&plain), "--resolution", "16"]);
+    // Two materials, one on each half of the faces.
+    let text = std::fs::read_to_string(&plain).unwrap();
+    let half = text.lines().filter(|l| l.starts_with("f ")).count() / 2;
+    let (mut obj, mut faces) = (String::from("mtllib two.mtl\nusemtl red\n"), 0);
+    for line in text.lines() {
+        if line.starts_with("f ") {
+            faces += 1;
+            if faces == half + 1 {
+                obj += "usemtl blue\n";
+            }
+        }
+        obj += line;
+        obj += "\n";
+    }
+    let input = dir.join("two.obj");
+    std::fs::write(&input, obj).unwrap();
+    std::fs::write(dir.join("two.mtl"), "newmtl red\nKd 1 0 0\nnewmtl blue\nKd 0 0 1\n").unwrap();
+    let server = Server::start();
+    let (local, remote) = (dir.join("local.glb"), dir.join("remote.glb"));
+    let l = ok_json(&["simplify", s(&input), "-o", s(&local), "--ratio", "0.8", "--json"]);
+    let r = ok_json(&[
+        "client",
+        "--server",
+        &server.address,
+        "simplify",
+        s(&input),
+        "-o",
+        s(&remote),
+        "--ratio",
+        "0.8",
+        "--json",
+    ]);
+    assert_eq!((&l["faces_out"], &l["vertices_out"]), (&r["faces_out"], &r["vertices_out"]));
+    // The GLB's JSON chunk: its materials, and which primitive draws with which.
+    let materials = |path: &std::path::Path| {
+        let bytes = std::fs::read(path).unwrap();
+        let length = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        let json: Value = serde_json::from_slice(&bytes[20..20 + length]).unwrap();
+        let names: Vec<Value> = json["materials"].as_array().unwrap().iter().map(|m| m["name"].clone()).collect();
+        let used: Vec<Value> =
+            json["meshes"][0]["primitives"].as_array().unwrap().iter().map(|p| p["material"].clone()).collect();
+        (names, used)
+    };
+    let (names, used) = materials(&remote);
+    assert_eq!(names.len(), 2, "{names:?}");
+    assert_eq!(used.len(), 2, "one primitive per material: {used:?}");
+    assert_eq!(materials(&local), (names, used));
+    let same = ok_json(&["hausdorff", s(&local), s(&remote), "--json"]);
+    assert_eq!(same["hausdorff_paper"], 0.0, "the server's result is the local one");
+}
+
+#[test]
 fn outputs_are_checked_before_any_work() {
     let dir = tempdir("outputs");
     // The input does not even exist: the output's error comes first, so no work was done.

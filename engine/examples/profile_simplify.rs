@@ -6,6 +6,7 @@
 //!   faces (default 0.1), REPEAT times (default 5); prints each time and the best. Run it under
 //!   `valgrind --tool=callgrind` with REPEAT 1 for instruction counts.
 //! - `--peer`: meshoptimizer's `simplify` on the same mesh and target instead.
+//! - `--guard`: w = 0 (the default) with the distance guard at weight 1.
 //! - `--digest`: one hash per (w, placement) of the output mesh and the vertex splits, and one for
 //!   Melax: a change meant to be output-preserving must print the same lines before and after.
 
@@ -63,7 +64,7 @@ fn main() {
     let flag = |name: &str| args.iter().any(|a| a == name);
     let positional: Vec<&String> = args.iter().filter(|a| !a.starts_with("--")).collect();
     let Some(path) = positional.first() else {
-        eprintln!("usage: profile_simplify FILE [KEEP] [REPEAT] [--peer] [--digest]");
+        eprintln!("usage: profile_simplify FILE [KEEP] [REPEAT] [--peer] [--guard] [--digest]");
         std::process::exit(2);
     };
     let mesh = prepare(&meshlod_engine::io::read_mesh(path.as_str()).expect("reads")).0;
@@ -78,6 +79,10 @@ fn main() {
         let started = Instant::now();
         let faces = if flag("--peer") {
             peer(&mesh, keep)
+        } else if flag("--guard") {
+            let options =
+                SimplifyOptions { guard: 1.0, ..options(&mesh, keep, Metric::Qfvp { w: 0.0 }, Placement::Optimal) };
+            simplify(&mesh, &options).expect("simplifies").mesh.face_count()
         } else {
             simplify(&mesh, &options(&mesh, keep, Metric::Qfvp { w: 1.0 }, Placement::Optimal))
                 .expect("simplifies")

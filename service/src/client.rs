@@ -9,6 +9,8 @@ use anyhow::{Context, Result};
 use tonic::codec::CompressionEncoding;
 use tonic::transport::{Channel, Endpoint};
 
+use meshlod_engine::io::{MeshFormat, ReadLimits, read_mesh_bytes, write_mesh_to};
+
 use crate::convert::{MeshLimits, mesh_from_proto, mesh_to_proto, progressive_from_proto};
 use crate::executor::{
     Executor, PredictJob, RefineJob, SimplifyJob, check_simplify_outputs, finish_refine, finish_simplify, load,
@@ -108,8 +110,26 @@ impl Remote {
     }
 }
 
-fn input_of(mesh: &meshlod_engine::Mesh) -> proto::MeshInput {
-    proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(mesh_to_proto(mesh))) }
+/// How a mesh goes up: as a `Mesh` message, or, when it has materials (which that message cannot
+/// carry), as a GLB file with its materials, textures and images; then the result is asked for as
+/// GLB too (the second value), so that it comes back with them.
+fn input_of(mesh: &meshlod_engine::Mesh) -> Result<(proto::MeshInput, Option<proto::MeshFormat>)> {
+    if mesh.corners.materials.is_none() || mesh.corners.library.is_none() {
+        return Ok((proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(mesh_to_proto(mesh))) }, None));
+    }
+    let mut data = Vec::new();
+    write_mesh_to(&mut data, mesh, MeshFormat::Gltf).context("encoding the input as GLB")?;
+    let file = proto::EncodedMesh { data, format: proto::MeshFormat::Gltf as i32 };
+    Ok((proto::MeshInput { source: Some(proto::mesh_input::Source::File(file)) }, Some(proto::MeshFormat::Gltf)))
+}
+
+/// The result of a response: its `encoded` file when there is one, else its `mesh`.
+fn output_of(mesh: Option<&proto::Mesh>, encoded: Option<&proto::EncodedMesh>) -> Result<meshlod_engine::Mesh> {
+    if let Some(file) = encoded {
+        let name = std::path::Path::new("response.glb");
+        return Ok(read_mesh_bytes(&file.data, Some(MeshFormat::Gltf), name, &ReadLimits::default())?);
+    }
+    Ok(mesh_from_proto(mesh.context("response without mesh")?, "mesh", &MeshLimits::default())?)
 }
 
 /// A status from the server as an error for people.
@@ -124,23 +144,23 @@ impl Executor for Remote {
         let options = proto::SimplifyOptions { return_progressive: job.pm.is_some(), ..job.options };
         let mut client = self.client.clone();
         let response = self.runtime.block_on(async {
-            let input = mesh_to_proto(&mesh);
-            // Meshes over 32 MiB go up in 1 MiB chunks (SimplifyUpload) instead of one message.
-            if 4 * (input.positions.len() + input.indices.len()) > UPLOAD_ABOVE_BYTES {
-                let chunks = chunked(&input, Some(options));
+            // Meshes over 32 MiB go up in 1 MiB chunks (SimplifyUpload) instead of one message:
+            // positions and indices only, as that call takes them.
+            if 12 * mesh.vertex_count() + 12 * mesh.face_count() > UPLOAD_ABOVE_BYTES {
+                let chunks = chunked(&mesh_to_proto(&mesh), Some(options));
                 client.simplify_upload(self.request(tokio_stream::iter(chunks))?).await.map_err(status_error)
             } else {
+                let (input, output_format) = input_of(&mesh)?;
                 let request = proto::SimplifyRequest {
-                    input: Some(proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(input)) }),
+                    input: Some(input),
                     options: Some(options),
-                    ..Default::default()
+                    output_format: output_format.map_or(0, |f| f as i32),
                 };
                 client.simplify(self.request(request)?).await.map_err(status_error)
             }
         })?;
         let response = response.into_inner();
-        let out =
-            mesh_from_proto(response.mesh.as_ref().context("response without mesh")?, "mesh", &MeshLimits::default())?;
+        let out = output_of(response.mesh.as_ref(), response.encoded.as_ref())?;
         let progressive = match &response.progressive {
             // With attributes the server sends the `.pm` file too: the same bytes as a local run.
             Some(pm) if !pm.file.is_empty() => {
@@ -158,21 +178,25 @@ impl Executor for Remote {
     fn refine(&self, job: &RefineJob) -> Result<Report> {
         meshlod_engine::io::output_format(&job.output)?;
         let mesh = load(&job.input)?;
-        let request = proto::RefineRequest { input: Some(input_of(&mesh)), ..job.request.clone() };
+        let (input, output_format) = input_of(&mesh)?;
+        let request = proto::RefineRequest {
+            input: Some(input),
+            output_format: output_format.map_or(job.request.output_format, |f| f as i32),
+            ..job.request.clone()
+        };
         let mut client = self.client.clone();
         let response = self
             .runtime
             .block_on(async { client.refine(self.request(request)?).await.map_err(status_error) })?
             .into_inner();
-        let out =
-            mesh_from_proto(response.mesh.as_ref().context("response without mesh")?, "mesh", &MeshLimits::default())?;
+        let out = output_of(response.mesh.as_ref(), response.encoded.as_ref())?;
         finish_refine(job, &out, &response.stats.unwrap_or_default())
     }
 
     fn predict(&self, job: &PredictJob) -> Result<Report> {
         let mesh = load(&job.input)?;
         let request = proto::PredictRequest {
-            subject: Some(proto::predict_request::Subject::Input(input_of(&mesh))),
+            subject: Some(proto::predict_request::Subject::Input(input_of(&mesh)?.0)),
             target_faces: job.target_faces,
             target_ratio: job.target_ratio,
         };
