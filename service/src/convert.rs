@@ -176,6 +176,12 @@ pub fn mesh_from_proto(m: &proto::Mesh, field: &str, limits: &MeshLimits) -> Res
     };
     let mut mesh = Mesh::new(positions, triangles).map_err(|e| invalid(field, e.to_string()))?;
     mesh.corners = corners;
+    if !mesh.corners.is_empty() {
+        // One value per vertex, as in PLY: a seam arrives as two vertices at one position (as
+        // `mesh_to_proto` sends it). Joined back, a seam is a seam, not a cut that the simplifier
+        // would treat as two borders and could open.
+        mesh.weld_positions();
+    }
     Ok(mesh)
 }
 
@@ -392,5 +398,24 @@ mod tests {
         let three = proto::Mesh { indices: vec![0, 1, 2, 0, 2, 3, 1, 2, 3], ..mesh };
         let status = mesh_from_proto(&three, "input.mesh", &limits).unwrap_err();
         assert!(status.message().contains("3 faces exceeds the limit of 2"), "{}", status.message());
+    }
+
+    #[test]
+    fn a_seam_comes_back_a_seam_not_a_cut() {
+        // A closed box whose faces each have their own texture coordinates (a seam along every
+        // edge): the contract sends a vertex once per value; back in the engine they are one
+        // vertex again, so the surface stays closed (no border) and the values stay per corner.
+        let mut mesh = meshlod_engine::procedural::sharp_box(2);
+        let uvs = (0..mesh.face_count()).flat_map(|f| [[f as f32, 0.0], [f as f32, 1.0], [f as f32, 2.0]]).collect();
+        mesh.corners.uvs = Some(uvs);
+        let sent = mesh_to_proto(&mesh);
+        assert_eq!(sent.positions.len() / 3, 3 * mesh.face_count(), "split once per corner");
+        let back = mesh_from_proto(&sent, "input.mesh", &MeshLimits::default()).unwrap();
+        assert_eq!(back.vertex_count(), mesh.vertex_count());
+        assert_eq!(meshlod_engine::validate::validate(&back).boundary_edges, 0);
+        assert_eq!(back.corners.uvs, mesh.corners.uvs);
+        for (t, u) in back.triangles.iter().zip(&mesh.triangles) {
+            assert_eq!(t.map(|v| back.positions[v as usize]), u.map(|v| mesh.positions[v as usize]));
+        }
     }
 }
