@@ -47,7 +47,7 @@ def meshes_in(dirs, only):
     return found
 
 
-def simplify_all(args, name, path, tmp, cache, save):
+def simplify_all(args, name, path, tmp, cache, targets, save):
     """The cells of one mesh: {(reduce, simplifier): (faces, error)}, from the cache or measured."""
     original = os.path.join(tmp, f"{name}.ply")
     if not os.path.exists(original):
@@ -63,18 +63,19 @@ def simplify_all(args, name, path, tmp, cache, save):
                                         f"--guard={g}", "--json"))
                 save(name, reduce, key, report["faces_out"], hausdorff(args.meshlod, original, out))
             target = target if target is not None else cache[(name, reduce, key)][0]
-        if (name, reduce, "meshoptimizer") not in cache:
+        # The peers' results hold for one target: a meshlod build that stops elsewhere reruns them.
+        if (name, reduce, "meshoptimizer") not in cache or targets.get((name, reduce, "meshoptimizer")) != target:
             out = os.path.join(tmp, f"{name}-{reduce}-meshopt.ply")
             faces = int(run(args.meshopt, original, out, target).strip())
-            save(name, reduce, "meshoptimizer", faces, hausdorff(args.meshlod, original, out))
-        if (name, reduce, "MeshLab") not in cache:
+            save(name, reduce, "meshoptimizer", faces, hausdorff(args.meshlod, original, out), target)
+        if (name, reduce, "MeshLab") not in cache or targets.get((name, reduce, "MeshLab")) != target:
             ms = pymeshlab.MeshSet()
             ms.load_new_mesh(original)
             ms.meshing_decimation_quadric_edge_collapse(targetfacenum=target)
             out = os.path.join(tmp, f"{name}-{reduce}-meshlab.ply")
             ms.save_current_mesh(out, binary=True, save_vertex_normal=False, save_vertex_color=False,
                                  save_vertex_quality=False, save_face_color=False, save_face_quality=False)
-            save(name, reduce, "MeshLab", ms.current_mesh().face_number(), hausdorff(args.meshlod, original, out))
+            save(name, reduce, "MeshLab", ms.current_mesh().face_number(), hausdorff(args.meshlod, original, out), target)
 
 
 def report(args, names, cache):
@@ -131,16 +132,21 @@ def main():
     ap.add_argument("--out", default=None)
     ap.add_argument("--only", nargs="*", default=[])
     args = ap.parse_args()
-    cache = {}
+    # The cache is keyed by mesh, reduction and simplifier; a peer's entry also records the target it
+    # was given. Only meshlod's own columns are reused blindly: rerun with a new cache after a change.
+    cache, targets = {}, {}
     if os.path.exists(args.cache):
         for line in open(args.cache):
             r = json.loads(line)
             cache[(r["mesh"], r["reduce"], r["simplifier"])] = (r["faces"], r["error"])
+            targets[(r["mesh"], r["reduce"], r["simplifier"])] = r.get("target")
     log = open(args.cache, "a")
 
-    def save(name, reduce, simplifier, faces, error):
+    def save(name, reduce, simplifier, faces, error, target=None):
         cache[(name, reduce, simplifier)] = (faces, error)
-        log.write(json.dumps(dict(mesh=name, reduce=reduce, simplifier=simplifier, faces=faces, error=error)) + "\n")
+        targets[(name, reduce, simplifier)] = target
+        log.write(json.dumps(dict(mesh=name, reduce=reduce, simplifier=simplifier, faces=faces, error=error,
+                                  target=target)) + "\n")
         log.flush()
 
     tmp = tempfile.mkdtemp(prefix="meshlab-compare-")
@@ -148,7 +154,7 @@ def main():
     for i, (name, path) in enumerate(meshes):
         print(f"[{i + 1}/{len(meshes)}] {name}", file=sys.stderr, flush=True)
         try:
-            simplify_all(args, name, path, tmp, cache, save)
+            simplify_all(args, name, path, tmp, cache, targets, save)
         except subprocess.CalledProcessError as e:
             print(f"  skipped: {' '.join(e.cmd[:2])} failed: {e.stderr.strip()[-300:]}", file=sys.stderr)
     text = report(args, [n for n, _ in meshes], cache)
