@@ -33,10 +33,10 @@ pub(crate) struct SamplesArgs {
     #[arg(long)]
     out: PathBuf,
     /// Target ratios per mesh (w samples).
-    #[arg(long, default_value_t = 40)]
+    #[arg(long, default_value_t = 12)]
     per_mesh: usize,
     /// Targets per mesh and mode (ETC samples).
-    #[arg(long, default_value_t = 12)]
+    #[arg(long, default_value_t = 6)]
     etc_per_mesh: usize,
     /// Seed: the same seed gives the same samples.
     #[arg(long, default_value_t = 1)]
