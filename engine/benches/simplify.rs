@@ -12,6 +12,8 @@
 #[allow(unsafe_code, dead_code)]
 #[path = "support/mod.rs"]
 mod common;
+#[path = "support/peer.rs"]
+mod peer;
 
 use common::{PeakAlloc, best_of_interleaved, peak_during};
 use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
@@ -19,17 +21,10 @@ use meshlod_engine::io::read_mesh;
 use meshlod_engine::refine::subdivide_uniform;
 use meshlod_engine::simplify::{Metric, SimplifyOptions, simplify};
 use meshlod_engine::{Mesh, procedural};
+use peer::meshopt_simplify;
 
 #[global_allocator]
 static ALLOC: PeakAlloc = PeakAlloc;
-
-fn meshopt_simplify(mesh: &Mesh, target_faces: usize) -> Mesh {
-    let bytes: Vec<u8> = mesh.positions.iter().flat_map(|p| p.iter().flat_map(|c| c.to_le_bytes())).collect();
-    let adapter = meshopt::VertexDataAdapter::new(&bytes, 12, 0).expect("valid vertex data");
-    let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
-    let out = meshopt::simplify(&indices, &adapter, target_faces * 3, f32::MAX, meshopt::SimplifyOptions::None, None);
-    Mesh::new(mesh.positions.clone(), out.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect()).expect("valid")
-}
 
 fn case(name: &str, mesh: &Mesh, keep: f64, runs: usize, measure_error: bool, guard: f64, w: f64) {
     let faces_in = mesh.face_count();

@@ -10,6 +10,9 @@
 //! - `--digest`: one hash per (w, placement) of the output mesh and the vertex splits, and one for
 //!   Melax: a change meant to be output-preserving must print the same lines before and after.
 
+#[path = "../benches/support/peer.rs"]
+mod peer;
+
 use std::hash::{Hash, Hasher};
 use std::time::Instant;
 
@@ -25,14 +28,6 @@ fn options(mesh: &Mesh, keep: f64, metric: Metric, placement: Placement) -> Simp
         record_progressive: true,
         ..Default::default()
     }
-}
-
-fn peer(mesh: &Mesh, keep: f64) -> usize {
-    let bytes: Vec<u8> = mesh.positions.iter().flat_map(|p| p.iter().flat_map(|c| c.to_le_bytes())).collect();
-    let adapter = meshopt::VertexDataAdapter::new(&bytes, 12, 0).expect("valid vertex data");
-    let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
-    let target = (mesh.face_count() as f64 * keep).round() as usize * 3;
-    meshopt::simplify(&indices, &adapter, target, f32::MAX, meshopt::SimplifyOptions::None, None).len() / 3
 }
 
 fn digest(mesh: &Mesh, keep: f64) {
@@ -78,7 +73,7 @@ fn main() {
     for _ in 0..repeat {
         let started = Instant::now();
         let faces = if flag("--peer") {
-            peer(&mesh, keep)
+            peer::meshopt_simplify(&mesh, (mesh.face_count() as f64 * keep).round() as usize).face_count()
         } else if flag("--guard") {
             let options =
                 SimplifyOptions { guard: 1.0, ..options(&mesh, keep, Metric::Qfvp { w: 0.0 }, Placement::Optimal) };

@@ -56,6 +56,11 @@ pub(crate) struct SamplesArgs {
     refeature: bool,
 }
 
+/// Model inputs as CSV cells, the one way both the sampling and `--refeature` write them.
+fn cells(x: &[f32]) -> String {
+    x.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(",")
+}
+
 /// Highest ratio sampled (the paper stops below 1.0; 0.995 keeps 0.5%).
 const MAX_RATIO: f64 = 0.995;
 
@@ -69,8 +74,8 @@ fn mesh_files(dirs: &[PathBuf], only: &[String]) -> Result<Vec<(String, PathBuf)
         for entry in std::fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))? {
             let path = entry?.path();
             // glTF scenes are left out: the samples are about positions, and the folders hold them as OBJ/PLY.
-            let format = meshlod_engine::io::MeshFormat::from_extension(&path);
-            if format.is_none() || matches!(format, Some(meshlod_engine::io::MeshFormat::Gltf)) {
+            use meshlod_engine::io::MeshFormat;
+            if !matches!(MeshFormat::from_extension(&path), Some(f) if f != MeshFormat::Gltf) {
                 continue;
             }
             let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
@@ -138,15 +143,14 @@ pub(crate) fn run(args: SamplesArgs) -> Result<()> {
     }
     if args.resume {
         let done = meshes_in(&args.out)?;
-        let etc_done = meshes_in(&etc_path)?;
-        files.retain(|(name, _)| !(done.contains(name) && etc_done.contains(name)));
-        if done.iter().any(|m| !etc_done.contains(m)) || etc_done.iter().any(|m| !done.contains(m)) {
+        if done != meshes_in(&etc_path)? {
             bail!(
                 "{} and {} hold different meshes; resume needs both written together",
                 args.out.display(),
                 etc_path.display()
             );
         }
+        files.retain(|(name, _)| !done.contains(name));
         eprintln!("resuming: {} meshes done, {} to go", done.len(), files.len());
     }
     let started = std::time::Instant::now();
@@ -225,11 +229,10 @@ fn mesh_rows(
         }
     }
     for (i, &target) in targets.iter().enumerate() {
-        let x = w_input(&shape, faces_in, target);
+        let x = cells(&w_input(&shape, faces_in, target));
         let best = (0..5).min_by(|&a, &b| errors[i][a].total_cmp(&errors[i][b])).expect("five");
-        let xs: Vec<String> = x.iter().map(|v| v.to_string()).collect();
         let es: Vec<String> = errors[i].iter().map(|v| format!("{v:.9}")).collect();
-        writeln!(w_rows, "{name},{faces_in},{target},{},{},{}", xs.join(","), es.join(","), W_CLASSES[best])?;
+        writeln!(w_rows, "{name},{faces_in},{target},{x},{},{}", es.join(","), W_CLASSES[best])?;
     }
     for subdivide in [true, false] {
         for _ in 0..args.etc_per_mesh {
@@ -238,9 +241,8 @@ fn mesh_rows(
             let mode = if subdivide { RefineMode::Subdivide } else { RefineMode::Simplify };
             let r =
                 refine(&mesh, &RefineOptions { etc: None, target_faces: Some(target), mode, ..Default::default() })?;
-            let x = etc_input(&shape, subdivide, faces_in, target);
-            let xs: Vec<String> = x.iter().map(|v| v.to_string()).collect();
-            writeln!(etc_rows, "{name},{faces_in},{target},{},{},{:.9}", r.stats.faces_out, xs.join(","), r.stats.etc)?;
+            let x = cells(&etc_input(&shape, subdivide, faces_in, target));
+            writeln!(etc_rows, "{name},{faces_in},{target},{},{x},{:.9}", r.stats.faces_out, r.stats.etc)?;
             progress.inc(1);
         }
     }
@@ -314,24 +316,24 @@ fn refeature(
         let subdivide = old.iter().position(|h| *h == "subdivide");
         let mut out = format!("{header}\n");
         for (i, line) in lines.enumerate() {
-            let cells: Vec<&str> = line.split(',').collect();
-            if cells.len() != old.len() {
-                bail!("{} line {}: {} cells, the header has {}", path.display(), i + 2, cells.len(), old.len());
+            let row: Vec<&str> = line.split(',').collect();
+            if row.len() != old.len() {
+                bail!("{} line {}: {} cells, the header has {}", path.display(), i + 2, row.len(), old.len());
             }
             let number = |k: usize| -> Result<f64> {
-                cells[k]
+                row[k]
                     .parse()
-                    .with_context(|| format!("{} line {}: {:?} is not a number", path.display(), i + 2, cells[k]))
+                    .with_context(|| format!("{} line {}: {:?} is not a number", path.display(), i + 2, row[k]))
             };
-            let shape = shape_of(cells[0])?;
+            let shape = shape_of(row[0])?;
             let (faces_in, target) = (number(1)? as usize, number(2)? as usize);
-            let x: Vec<String> = if etc {
+            let x = if etc {
                 let subdivide = number(subdivide.context("no subdivide column")?)? > 0.5;
-                etc_input(&shape, subdivide, faces_in, target).iter().map(|v| v.to_string()).collect()
+                cells(&etc_input(&shape, subdivide, faces_in, target))
             } else {
-                w_input(&shape, faces_in, target).iter().map(|v| v.to_string()).collect()
+                cells(&w_input(&shape, faces_in, target))
             };
-            out += &format!("{},{},{}\n", cells[..first].join(","), x.join(","), cells[end..].join(","));
+            out += &format!("{},{x},{}\n", row[..first].join(","), row[end..].join(","));
         }
         std::fs::write(path, out).with_context(|| format!("writing {}", path.display()))?;
     }
