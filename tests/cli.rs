@@ -488,10 +488,13 @@ fn attributes_are_listed_converted_kept_by_simplify_and_their_loss_is_said() {
 fn textured_gltf_assets_convert_to_obj_with_their_attributes() {
     let Some(textured) = meshlod_engine::datasets::require_shared_textured("textured_gltf_convert") else { return };
     let dir = tempdir("gltf");
-    for asset in ["draco__Duck/Duck.gltf", "draco__CesiumMan/CesiumMan.gltf"] {
+    for (asset, attributes) in [
+        ("draco__Duck/Duck.gltf", serde_json::json!(["normal", "uv", "material"])),
+        ("draco__CesiumMan/CesiumMan.gltf", serde_json::json!(["normal", "uv", "joints", "weights", "material"])),
+    ] {
         let input = textured.join(asset);
         let info = ok_json(&["info", s(&input), "--json"]);
-        assert_eq!(info["attributes"], serde_json::json!(["normal", "uv", "material"]), "{asset}");
+        assert_eq!(info["attributes"], attributes, "{asset}");
         assert_eq!(
             (info["boundary_edges"].as_u64(), info["components"].as_u64()),
             (Some(0), Some(1)),
@@ -499,26 +502,38 @@ fn textured_gltf_assets_convert_to_obj_with_their_attributes() {
         );
         for out in ["asset.obj", "asset.glb", "asset.gltf"] {
             let out = dir.join(out);
-            assert!(meshlod(&["convert", s(&input), s(&out)]).status.success(), "{asset}");
+            let run = meshlod(&["convert", s(&input), s(&out)]);
+            assert!(run.status.success(), "{asset}");
             let copy = ok_json(&["info", s(&out), "--json"]);
-            for key in ["vertices", "faces", "attributes", "seam_edges"] {
+            for key in ["vertices", "faces", "seam_edges"] {
                 assert_eq!(copy[key], info[key], "{asset} → {}: {key}", out.display());
             }
+            // OBJ has no skin: the joints and weights go, and the warning says so.
+            let mut kept = attributes.as_array().unwrap().clone();
+            if out.extension().unwrap() == "obj" {
+                kept.retain(|a| a != "joints" && a != "weights");
+                let skinned = kept.len() < attributes.as_array().unwrap().len();
+                let stderr = String::from_utf8_lossy(&run.stderr);
+                assert_eq!(stderr.contains("no place for the mesh's joints, weights"), skinned, "{asset}: {stderr}");
+            }
+            assert_eq!(copy["attributes"], serde_json::Value::Array(kept), "{asset} → {}", out.display());
         }
     }
     fails_with(&["convert", s(&textured.join("draco__Duck/Duck.gltf")), s(&dir.join("duck.stl"))], "read only");
-    // What a result cannot carry is said: CesiumMan's skin, Lantern's tangents; Duck has nothing left out.
+    // What a result cannot carry is said: Lantern's tangents; Duck and CesiumMan (its skin and
+    // animations carried) have nothing left out, and a skinned result written as OBJ says what it lost.
     let warnings = |asset: &str| {
         let out = dir.join("lod.glb");
         let report = ok_json(&["simplify", s(&textured.join(asset)), "-o", s(&out), "--ratio", "0.9", "--json"]);
         assert_eq!(report["placement"], "endpoint", "{asset}: texture coordinates keep vertices in place");
         report["warnings"].as_array().unwrap().iter().map(|w| w.as_str().unwrap().to_string()).collect::<Vec<_>>()
     };
-    let cesium = warnings("draco__CesiumMan/CesiumMan.gltf");
-    assert!(
-        cesium.iter().any(|w| w.contains("skins") && w.contains("WEIGHTS_0") && w.contains("animations")),
-        "{cesium:?}"
-    );
+    assert_eq!(warnings("draco__CesiumMan/CesiumMan.gltf"), Vec::<String>::new());
+    let out = dir.join("lod.obj");
+    let cesium = textured.join("draco__CesiumMan/CesiumMan.gltf");
+    let report = ok_json(&["simplify", s(&cesium), "-o", s(&out), "--ratio", "0.9", "--json"]);
+    let said = report["warnings"].as_array().unwrap();
+    assert!(said.iter().any(|w| w.as_str().unwrap().contains("joints, weights")), "{said:?}");
     let lantern = warnings("draco__Lantern/Lantern.gltf");
     assert!(lantern.iter().any(|w| w.contains("TANGENT")), "{lantern:?}");
     assert_eq!(warnings("draco__Duck/Duck.gltf"), Vec::<String>::new());

@@ -52,6 +52,11 @@ pub struct CornerAttributes {
     pub normals: Option<Vec<[f32; 3]>>,
     /// Colours per corner, RGBA in [0, 1].
     pub colors: Option<Vec<[f32; 4]>>,
+    /// Skinning per corner (glTF JOINTS_0): the four joints, as indices into the rig's skin's
+    /// `joints`, that move the corner's vertex. Present exactly when `weights` is.
+    pub joints: Option<Vec<[u16; 4]>>,
+    /// Skinning per corner (glTF WEIGHTS_0): how much each of `joints` moves the vertex.
+    pub weights: Option<Vec<[f32; 4]>>,
     /// Material per corner (the same at a face's three corners): an index into `library`'s
     /// materials, or [`NO_MATERIAL`]. A vertex where faces of two materials meet is a seam.
     pub materials: Option<Vec<u32>>,
@@ -82,10 +87,58 @@ pub struct MaterialLibrary {
     pub extensions_used: Vec<String>,
     /// See `extensions_used`.
     pub extensions_required: Vec<String>,
-    /// What the input had that a mesh does not carry (skins, morph targets, animations, tangents,
-    /// second texture coordinates, point and line primitives), named for the warnings of every
-    /// operation that writes a result.
+    /// What the input had that a mesh does not carry (morph targets, tangents, second texture
+    /// coordinates, point and line primitives, a skeleton that cannot be kept), named for the
+    /// warnings of every operation that writes a result.
     pub not_carried: Vec<String>,
+    /// The skeleton and animations of a skinned asset, when the mesh carries its joints and
+    /// weights.
+    pub rig: Option<Rig>,
+}
+
+/// A skinned glTF asset's node hierarchy, skin and animations, carried so that a glTF written
+/// from the mesh still moves as its input did. The mesh's positions are in the skin's bind space
+/// (a skinned node's own transform is ignored, as glTF specifies), its corners carry the joints
+/// and weights, and the result is drawn by the node `mesh_node`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Rig {
+    /// glTF `nodes`, without their `mesh` and `camera` (a node keeps its children, transform,
+    /// skin, name and extras, so the indices the skins and animations use stay valid).
+    pub nodes: Vec<serde_json::Value>,
+    /// The node that draws the mesh, with the skin.
+    pub mesh_node: usize,
+    /// glTF `scenes`, and the default one.
+    pub scenes: Vec<serde_json::Value>,
+    /// See `scenes`.
+    pub scene: Option<usize>,
+    /// glTF `skins`; `inverseBindMatrices` refer to `accessors`.
+    pub skins: Vec<serde_json::Value>,
+    /// glTF `animations`; their samplers' `input` and `output` refer to `accessors`.
+    pub animations: Vec<serde_json::Value>,
+    /// The accessors the skins and animations read, with their data.
+    pub accessors: Vec<RigAccessor>,
+}
+
+impl Rig {
+    /// Number of joints of the skin that draws the mesh (what a corner's joint indices are below).
+    pub fn joint_count(&self) -> usize {
+        let skin = self.nodes.get(self.mesh_node).and_then(|n| n.get("skin")).and_then(|s| s.as_u64());
+        skin.and_then(|s| self.skins.get(s as usize))
+            .and_then(|s| s.get("joints"))
+            .and_then(|j| j.as_array())
+            .map_or(0, Vec::len)
+    }
+}
+
+/// One accessor of a [`Rig`]: its JSON (`componentType`, `type`, `count`, `normalized`, `min`,
+/// `max`, `name`; no `bufferView`, `byteOffset` or `sparse`) and its elements packed one after
+/// another.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RigAccessor {
+    /// See [`RigAccessor`].
+    pub json: serde_json::Value,
+    /// See [`RigAccessor`].
+    pub bytes: Vec<u8>,
 }
 
 /// One image of a [`MaterialLibrary`].
@@ -162,6 +215,12 @@ impl CornerAttributes {
         if self.colors.is_some() {
             names.push("color");
         }
+        if self.joints.is_some() {
+            names.push("joints");
+        }
+        if self.weights.is_some() {
+            names.push("weights");
+        }
         if self.materials.is_some() {
             names.push("material");
         }
@@ -170,7 +229,18 @@ impl CornerAttributes {
 
     /// Whether there is no attribute.
     pub fn is_empty(&self) -> bool {
-        self.uvs.is_none() && self.normals.is_none() && self.colors.is_none() && self.materials.is_none()
+        self.uvs.is_none()
+            && self.normals.is_none()
+            && self.colors.is_none()
+            && self.joints.is_none()
+            && self.weights.is_none()
+            && self.materials.is_none()
+    }
+
+    /// Whether there is a value besides the material (what splits a vertex in a format without
+    /// materials).
+    fn has_values(&self) -> bool {
+        self.uvs.is_some() || self.normals.is_some() || self.colors.is_some() || self.joints.is_some()
     }
 
     /// The attributes of the corners `kept` (corner indices), in that order.
@@ -182,6 +252,8 @@ impl CornerAttributes {
             uvs: pick(&self.uvs, kept.clone()),
             normals: pick(&self.normals, kept.clone()),
             colors: pick(&self.colors, kept.clone()),
+            joints: pick(&self.joints, kept.clone()),
+            weights: pick(&self.weights, kept.clone()),
             materials: pick(&self.materials, kept),
             library: self.library.clone(),
             uv_origin_top: self.uv_origin_top,
@@ -196,6 +268,8 @@ impl CornerAttributes {
         same(&self.uvs, a, b)
             && same(&self.normals, a, b)
             && same(&self.colors, a, b)
+            && same(&self.weights, a, b)
+            && self.joints.as_ref().is_none_or(|j| j[a] == j[b])
             && self.materials.as_ref().is_none_or(|m| m[a] == m[b])
     }
 
@@ -216,7 +290,7 @@ impl CornerAttributes {
 
     fn split_vertices(&self, triangles: &[[u32; 3]], vertex_count: usize, by_material: bool) -> Wedges {
         let materials = self.materials.as_ref().filter(|_| by_material);
-        if self.uvs.is_none() && self.normals.is_none() && self.colors.is_none() && materials.is_none() {
+        if !self.has_values() && materials.is_none() {
             return Wedges {
                 source: (0..vertex_count).collect(),
                 corner_vertex: triangles.iter().flatten().copied().collect(),
@@ -228,6 +302,8 @@ impl CornerAttributes {
             bits.extend(self.normals.iter().flat_map(|n| n[k].map(f32::to_bits)));
             bits.extend(self.uvs.iter().flat_map(|u| u[k].map(f32::to_bits)));
             bits.extend(self.colors.iter().flat_map(|c| c[k].map(f32::to_bits)));
+            bits.extend(self.joints.iter().flat_map(|j| j[k].map(u32::from)));
+            bits.extend(self.weights.iter().flat_map(|w| w[k].map(f32::to_bits)));
             bits.extend(materials.map(|m| m[k]));
             bits
         };
@@ -280,6 +356,37 @@ impl CornerAttributes {
         check(&self.uvs, "uv", corner_count)?;
         check(&self.normals, "normal", corner_count)?;
         check(&self.colors, "color", corner_count)?;
+        check(&self.weights, "weights", corner_count)?;
+        match &self.joints {
+            Some(joints) if joints.len() != corner_count => {
+                return Err(MeshError::InvalidParameter {
+                    name: "joints",
+                    reason: format!("{} per-corner values for {corner_count} corners", joints.len()),
+                });
+            }
+            Some(_) if self.weights.is_none() => {
+                return Err(MeshError::InvalidParameter { name: "weights", reason: "joints without weights".into() });
+            }
+            None if self.weights.is_some() => {
+                return Err(MeshError::InvalidParameter { name: "joints", reason: "weights without joints".into() });
+            }
+            _ => {}
+        }
+        if let Some(joints) = &self.joints {
+            let rig = self.library.as_ref().and_then(|l| l.rig.as_ref());
+            let known = rig.map_or(0, Rig::joint_count);
+            if let Some(corner) = joints.iter().position(|j| j.iter().any(|&x| x as usize >= known)) {
+                let reason = match rig {
+                    None => "joints without a skin to refer to".to_string(),
+                    Some(_) => format!(
+                        "corner {corner} (face {}) names joint {}; the skin has {known}",
+                        corner / 3,
+                        joints[corner].iter().max().copied().unwrap_or(0)
+                    ),
+                };
+                return Err(MeshError::InvalidParameter { name: "joints", reason });
+            }
+        }
         if let Some(materials) = &self.materials {
             let reason = if materials.len() != corner_count {
                 Some(format!("{} per-corner values for {corner_count} corners", materials.len()))

@@ -130,6 +130,10 @@ fn textured_assets_read_with_their_attributes_as_one_surface() {
         assert_eq!(names.contains(&"uv"), row["has_uv"] == "true", "{}: {names:?}", row["file"]);
         assert_eq!(names.contains(&"normal"), row["has_normals"] == "true", "{}: {names:?}", row["file"]);
         assert_eq!(names.contains(&"color"), row["has_colors"] == "true", "{}: {names:?}", row["file"]);
+        let skinned = row["skinned"] == "true";
+        assert_eq!(names.contains(&"joints") && names.contains(&"weights"), skinned, "{}: {names:?}", row["file"]);
+        let rig = mesh.corners.library.as_ref().and_then(|l| l.rig.as_ref());
+        assert_eq!(rig.is_some_and(|r| !r.skins.is_empty() && !r.animations.is_empty()), skinned, "{}", row["file"]);
         let report = meshlod_engine::validate::validate(&mesh);
         // glTF splits seam vertices; the reader joins them back, so seams are seams there. OBJ keeps
         // the file's vertices: an exporter that duplicated them leaves borders (`clean` joins them).
@@ -243,6 +247,8 @@ fn textured_assets_come_out_as_gltf_with_their_attributes_and_textures() {
         };
         assert_eq!(output.materials.len(), input.materials.len(), "{name}");
         assert_eq!(output.images.len(), input.images.len(), "{name}");
+        // A skinned asset still has its skeleton, skin and every animation, their data unchanged.
+        assert_eq!(output.rig, input.rig, "{name}");
         for (before, after) in input.images.iter().zip(&output.images) {
             match &before.source {
                 ImageSource::File(file) if file.is_file() => {
@@ -335,6 +341,8 @@ fn corner_key(mesh: &Mesh, k: usize) -> Vec<u32> {
     key.extend(c.uvs.iter().flat_map(|u| u[k].map(f32::to_bits)));
     key.extend(c.normals.iter().flat_map(|n| n[k].map(f32::to_bits)));
     key.extend(c.colors.iter().flat_map(|x| x[k].map(f32::to_bits)));
+    key.extend(c.joints.iter().flat_map(|x| x[k].map(u32::from)));
+    key.extend(c.weights.iter().flat_map(|x| x[k].map(f32::to_bits)));
     key
 }
 

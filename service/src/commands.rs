@@ -264,7 +264,8 @@ fn convert(input: &Path, output: &Path, do_clean: bool, drop_attributes: bool) -
     if drop_attributes {
         mesh.corners = Default::default();
     }
-    if let Some(warning) = mesh.corners.not_carried_warning() {
+    let unwritten = meshlod_engine::io::unwritten_warning(output_format(output)?, &mesh);
+    for warning in mesh.corners.not_carried_warning().into_iter().chain(unwritten) {
         eprintln!("meshlod: warning: {warning}");
     }
     if do_clean {

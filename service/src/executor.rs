@@ -92,6 +92,7 @@ pub fn finish_simplify(
 ) -> Result<Report> {
     write_mesh(&job.output, mesh)?;
     let mut report = report::simplify(stats, measured);
+    add_unwritten_warning(&mut report, &job.output, mesh);
     if let Some(path) = &job.pm {
         let pm = progressive.context("the run returned no progressive mesh")?;
         let bytes = if job.options.progressive_lossless { encode_lossless(pm) } else { encode(pm) };
@@ -101,10 +102,19 @@ pub fn finish_simplify(
     Ok(report)
 }
 
+/// Adds to the report's warnings what the output file's format could not hold of `mesh`.
+fn add_unwritten_warning(report: &mut Report, output: &std::path::Path, mesh: &Mesh) {
+    let warning = output_format(output).ok().and_then(|format| meshlod_engine::io::unwritten_warning(format, mesh));
+    if let (Some(warning), Some(list)) = (warning, report.get_mut("warnings").and_then(|w| w.as_array_mut())) {
+        list.push(warning.into());
+    }
+}
+
 /// The end of every refine job: writes the mesh, measures it against the reference if asked.
 pub fn finish_refine(job: &RefineJob, mesh: &Mesh, stats: &proto::RefineStats) -> Result<Report> {
     write_mesh(&job.output, mesh)?;
     let mut report = report::refine(stats);
+    add_unwritten_warning(&mut report, &job.output, mesh);
     if let Some(reference) = &job.reference {
         let reference_mesh = load(reference)?;
         let d = hausdorff(&reference_mesh, mesh, &HausdorffOptions::default())?;

@@ -24,7 +24,7 @@ use gltf::mesh::Mode;
 
 use super::ReadLimits;
 use crate::error::MeshError;
-use crate::mesh::{CornerAttributes, Image, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL};
+use crate::mesh::{CornerAttributes, Image, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL, Rig};
 
 /// Extensions whose data meshlod cannot decode; a file that requires one is refused by name.
 const UNSUPPORTED: [&str; 3] = ["KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_mesh_quantization"];
@@ -45,6 +45,8 @@ struct Part {
     normals: Option<Vec<[f32; 3]>>,
     uvs: Option<Vec<[f32; 2]>>,
     colors: Option<Vec<[f32; 4]>>,
+    joints: Option<Vec<[u16; 4]>>,
+    weights: Option<Vec<[f32; 4]>>,
     material: u32,
 }
 
@@ -123,10 +125,8 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
     for accessor in document.accessors() {
         check_accessor(&accessor).map_err(|reason| err(&format!("accessor {}", accessor.index()), reason))?;
     }
-    let library = library(json, document, &buffers, folder).map_err(|(at, reason)| err(&at, reason))?;
-
-    // Mesh instances with their world transforms.
-    let mut instances: Vec<(gltf::Mesh, DMat4)> = Vec::new();
+    // Mesh instances with their world transforms and the node that draws them.
+    let mut instances: Vec<(gltf::Mesh, DMat4, usize)> = Vec::new();
     let scene = document.default_scene().or_else(|| document.scenes().next());
     match scene {
         Some(scene) => {
@@ -140,17 +140,42 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
                 let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
                 let world = parent * local;
                 if let Some(mesh) = node.mesh() {
-                    instances.push((mesh, world));
+                    instances.push((mesh, world, node.index()));
                 }
                 stack.extend(node.children().map(|c| (c, world)));
             }
         }
-        None => instances.extend(document.meshes().map(|m| (m, DMat4::IDENTITY))),
+        None => instances.extend(document.meshes().map(|m| (m, DMat4::IDENTITY, usize::MAX))),
     }
+    // A skinned asset keeps its skeleton when every instance is drawn with one skin (a character):
+    // its vertices are then in the skin's bind space, where glTF places them (the node's own
+    // transform is ignored), and carry their joints and weights.
+    let skin_of = |node: usize| document.nodes().nth(node).and_then(|n| n.skin()).map(|s| s.index());
+    let rigged = match instances.first() {
+        Some(&(_, _, node)) => {
+            skin_of(node).filter(|&s| instances.iter().all(|&(_, _, n)| skin_of(n) == Some(s))).map(|_| node)
+        }
+        None => None,
+    };
+    let rig = match rigged {
+        Some(node) => Some(rig(&raw_json(json).map_err(|r| err("document", r))?, document, &buffers, node)),
+        None => None,
+    };
+    let (rig, rig_refused) = match rig {
+        Some(Ok(rig)) => (Some(rig), None),
+        Some(Err(reason)) => (None, Some(reason)),
+        None => (None, None),
+    };
+    if rig.is_some() {
+        instances.iter_mut().for_each(|i| i.1 = DMat4::IDENTITY);
+    }
+    let joint_count = rig.as_ref().map_or(0, crate::mesh::Rig::joint_count);
+    let library =
+        library(json, document, &buffers, folder, rig, rig_refused).map_err(|(at, reason)| err(&at, reason))?;
 
     // Counts first, against the limits, before reading any data.
     let (mut vertices, mut corners) = (0u64, 0u64);
-    for (mesh, _) in &instances {
+    for (mesh, _, _) in &instances {
         for primitive in mesh.primitives().filter(|p| is_surface(p.mode())) {
             let positions = primitive.get(&gltf::Semantic::Positions).ok_or_else(|| {
                 err(&format!("mesh {} primitive {}", mesh.index(), primitive.index()), "has no POSITION".into())
@@ -163,16 +188,16 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
     limits.check_faces(corners / 3)?;
 
     let mut parts = Vec::new();
-    for (mesh, world) in &instances {
+    for (mesh, world, _) in &instances {
         for primitive in mesh.primitives().filter(|p| is_surface(p.mode())) {
             limits.check_cancel()?;
             let at = format!("mesh {} primitive {}", mesh.index(), primitive.index());
             // The checks above make the reads in range; a panic in the crate would still be a bug
             // of this reader, reported as one rather than taking the caller down.
-            let part =
-                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| read_primitive(&primitive, &buffers, world)))
-                    .map_err(|_| err(&at, "could not be read (malformed accessor data)".into()))?
-                    .map_err(|reason| err(&at, reason))?;
+            let read = || read_primitive(&primitive, &buffers, world, joint_count);
+            let part = std::panic::catch_unwind(std::panic::AssertUnwindSafe(read))
+                .map_err(|_| err(&at, "could not be read (malformed accessor data)".into()))?
+                .map_err(|reason| err(&at, reason))?;
             parts.push(part);
         }
     }
@@ -187,8 +212,10 @@ fn library(
     document: &gltf::Document,
     buffers: &[Vec<u8>],
     folder: Option<&Path>,
+    rig: Option<Rig>,
+    rig_refused: Option<String>,
 ) -> Result<MaterialLibrary, (String, String)> {
-    let raw: serde_json::Value = serde_json::from_slice(json).map_err(|e| ("document".to_string(), e.to_string()))?;
+    let raw = raw_json(json).map_err(|reason| ("document".to_string(), reason))?;
     let array = |key: &str| raw.get(key).and_then(|v| v.as_array()).cloned().unwrap_or_default();
     let mut images = Vec::new();
     for (image, mut json) in document.images().zip(array("images")) {
@@ -246,19 +273,116 @@ fn library(
             }
             for (semantic, _) in primitive.attributes() {
                 let name = semantic.to_string();
-                if !matches!(name.as_str(), "POSITION" | "NORMAL" | "TEXCOORD_0" | "COLOR_0") {
+                let skin = matches!(name.as_str(), "JOINTS_0" | "WEIGHTS_0") && rig.is_some();
+                if !skin && !matches!(name.as_str(), "POSITION" | "NORMAL" | "TEXCOORD_0" | "COLOR_0") {
                     note(format!("{name} values"));
                 }
             }
         }
     }
-    if document.skins().next().is_some() {
-        note("skins".into());
+    if rig.is_none() && document.skins().next().is_some() {
+        note(rig_refused.unwrap_or_else(|| "skins (the meshes are not all drawn with one skin)".into()));
     }
-    if document.animations().next().is_some() {
+    if rig.is_none() && document.animations().next().is_some() {
         note("animations".into());
     }
-    Ok(MaterialLibrary { materials, textures, samplers, images, extensions_used, extensions_required, not_carried })
+    Ok(MaterialLibrary {
+        materials,
+        textures,
+        samplers,
+        images,
+        extensions_used,
+        extensions_required,
+        not_carried,
+        rig,
+    })
+}
+
+/// The document's JSON as a value.
+fn raw_json(json: &[u8]) -> Result<serde_json::Value, String> {
+    serde_json::from_slice(json).map_err(|e| e.to_string())
+}
+
+/// The skeleton of a skinned asset drawn by node `mesh_node`: the nodes, scenes, skins and
+/// animations, with the data of the accessors these read; `Err` names what cannot be carried.
+fn rig(
+    raw: &serde_json::Value,
+    document: &gltf::Document,
+    buffers: &[Vec<u8>],
+    mesh_node: usize,
+) -> Result<Rig, String> {
+    let array = |key: &str| raw.get(key).and_then(|v| v.as_array()).cloned().unwrap_or_default();
+    let mut accessors: Vec<crate::mesh::RigAccessor> = Vec::new();
+    let mut carried: std::collections::HashMap<u64, usize> = std::collections::HashMap::new();
+    // An accessor's data, packed, under a new number (the same accessor once).
+    let mut carry = |value: &mut serde_json::Value| -> Result<(), String> {
+        let Some(index) = value.as_u64() else { return Ok(()) };
+        if let Some(&k) = carried.get(&index) {
+            *value = k.into();
+            return Ok(());
+        }
+        let accessor = document.accessors().nth(index as usize).ok_or("an accessor that does not exist")?;
+        if accessor.sparse().is_some() {
+            return Err(format!("skins and animations (accessor {index} is sparse)"));
+        }
+        let element = accessor.size();
+        let mut bytes = vec![0u8; element * accessor.count()];
+        if let Some(view) = accessor.view() {
+            let stride = view.stride().unwrap_or(element);
+            let data = &buffers[view.buffer().index()][view.offset()..view.offset() + view.length()];
+            for (i, chunk) in bytes.chunks_exact_mut(element).enumerate() {
+                let start = accessor.offset() + i * stride;
+                chunk.copy_from_slice(&data[start..start + element]);
+            }
+        }
+        let mut json = raw["accessors"][index as usize].clone();
+        if let Some(object) = json.as_object_mut() {
+            for key in ["bufferView", "byteOffset", "sparse"] {
+                object.remove(key);
+            }
+        }
+        accessors.push(crate::mesh::RigAccessor { json, bytes });
+        carried.insert(index, accessors.len() - 1);
+        *value = (accessors.len() - 1).into();
+        Ok(())
+    };
+    let mut skins = array("skins");
+    for skin in &mut skins {
+        if let Some(matrices) = skin.get_mut("inverseBindMatrices") {
+            carry(matrices)?;
+        }
+    }
+    let mut animations = Vec::new();
+    for mut animation in array("animations") {
+        // Channels that drive morph target weights have nothing to drive: the targets are not
+        // carried.
+        if let Some(channels) = animation.get_mut("channels").and_then(|c| c.as_array_mut()) {
+            channels.retain(|c| c["target"]["path"] != "weights");
+            if channels.is_empty() {
+                continue;
+            }
+        }
+        if let Some(samplers) = animation.get_mut("samplers").and_then(|s| s.as_array_mut()) {
+            for sampler in samplers {
+                for key in ["input", "output"] {
+                    if let Some(value) = sampler.get_mut(key) {
+                        carry(value)?;
+                    }
+                }
+            }
+        }
+        animations.push(animation);
+    }
+    let mut nodes = array("nodes");
+    for node in &mut nodes {
+        if let Some(object) = node.as_object_mut() {
+            for key in ["mesh", "camera", "weights", "extensions"] {
+                object.remove(key);
+            }
+        }
+    }
+    let scene = raw.get("scene").and_then(|s| s.as_u64()).map(|s| s as usize);
+    Ok(Rig { nodes, mesh_node, scenes: array("scenes"), scene, skins, animations, accessors })
 }
 
 /// Every key of every `extensions` object inside `value`.
@@ -334,7 +458,14 @@ fn check_accessor(accessor: &gltf::Accessor) -> Result<(), String> {
     Ok(())
 }
 
-fn read_primitive(primitive: &gltf::Primitive, buffers: &[Vec<u8>], world: &DMat4) -> Result<Part, String> {
+/// Reads one primitive, placed by `world`; joints and weights when it has them and `joint_count`
+/// (the skin's joints) is not zero, every joint index checked against it.
+fn read_primitive(
+    primitive: &gltf::Primitive,
+    buffers: &[Vec<u8>],
+    world: &DMat4,
+    joint_count: usize,
+) -> Result<Part, String> {
     let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| d.as_slice()));
     let positions: Vec<[f32; 3]> = reader.read_positions().ok_or("POSITION cannot be read")?.collect();
     let n = positions.len();
@@ -374,6 +505,34 @@ fn read_primitive(primitive: &gltf::Primitive, buffers: &[Vec<u8>], world: &DMat
     if let Some(v) = &colors {
         same_count("COLOR_0", v.len())?;
     }
+    let (mut joints, mut weights) = (None, None);
+    if joint_count > 0 {
+        joints = reader.read_joints(0).map(|r| r.into_u16().collect::<Vec<[u16; 4]>>());
+        weights = reader.read_weights(0).map(|r| r.into_f32().collect::<Vec<[f32; 4]>>());
+        if let (Some(j), Some(w)) = (&mut joints, &weights) {
+            // A joint of weight zero moves nothing: it is read as joint 0, as glTF asks unused
+            // entries to be, so that it neither splits a vertex nor draws a validator warning.
+            for (j, w) in j.iter_mut().zip(w) {
+                for k in 0..4 {
+                    if w[k] == 0.0 {
+                        j[k] = 0;
+                    }
+                }
+            }
+            same_count("JOINTS_0", j.len())?;
+            same_count("WEIGHTS_0", w.len())?;
+            if let Some((vertex, bad)) =
+                j.iter().enumerate().find_map(|(i, j)| j.iter().find(|&&x| x as usize >= joint_count).map(|&x| (i, x)))
+            {
+                return Err(format!("JOINTS_0 of vertex {vertex} names joint {bad}; the skin has {joint_count}"));
+            }
+            if let Some(vertex) = w.iter().position(|w| w.iter().any(|c| !c.is_finite())) {
+                return Err(format!("WEIGHTS_0 of vertex {vertex} is not a number"));
+            }
+        } else {
+            (joints, weights) = (None, None);
+        }
+    }
     // Placed in the world; normals by the inverse transpose; a mirror flips the winding back.
     let linear = DMat3::from_mat4(*world);
     let normal_matrix = linear.inverse().transpose();
@@ -393,8 +552,10 @@ fn read_primitive(primitive: &gltf::Primitive, buffers: &[Vec<u8>], world: &DMat
     });
     let uvs = uvs.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let colors = colors.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
+    let joints = joints.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
+    let weights = weights.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let material = primitive.material().index().map_or(NO_MATERIAL, |m| m as u32);
-    Ok(Part { positions, triangles, normals, uvs, colors, material })
+    Ok(Part { positions, triangles, normals, uvs, colors, joints, weights, material })
 }
 
 /// Joins the parts into one mesh; an attribute is kept when every part has it.
@@ -402,11 +563,18 @@ fn merge(parts: Vec<Part>, library: MaterialLibrary, path: &Path) -> Result<Mesh
     let keep_normals = parts.iter().all(|p| p.normals.is_some());
     let keep_uvs = parts.iter().all(|p| p.uvs.is_some());
     let keep_colors = parts.iter().all(|p| p.colors.is_some());
+    let mut library = library;
+    let keep_skin = library.rig.is_some() && parts.iter().all(|p| p.joints.is_some());
+    if !keep_skin && library.rig.take().is_some() {
+        library.not_carried.push("skins and animations (a primitive has no JOINTS_0 and WEIGHTS_0)".into());
+    }
     let mut mesh = Mesh::default();
     let mut corners = CornerAttributes {
         normals: keep_normals.then(Vec::new),
         uvs: keep_uvs.then(Vec::new),
         colors: keep_colors.then(Vec::new),
+        joints: keep_skin.then(Vec::new),
+        weights: keep_skin.then(Vec::new),
         materials: Some(Vec::new()),
         library: Some(std::sync::Arc::new(library)),
         uv_origin_top: true,
@@ -425,6 +593,12 @@ fn merge(parts: Vec<Part>, library: MaterialLibrary, path: &Path) -> Result<Mesh
             all.extend(these);
         }
         if let (Some(all), Some(these)) = (&mut corners.colors, part.colors) {
+            all.extend(these);
+        }
+        if let (Some(all), Some(these)) = (&mut corners.joints, part.joints) {
+            all.extend(these);
+        }
+        if let (Some(all), Some(these)) = (&mut corners.weights, part.weights) {
             all.extend(these);
         }
     }

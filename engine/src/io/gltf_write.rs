@@ -97,6 +97,16 @@ pub fn write_gltf(mut out: impl Write, mesh: &Mesh, binary: bool, folder: Option
         accessors.push(json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC4" }));
         attributes.insert("COLOR_0".into(), json!(accessors.len() - 1));
     }
+    if let (Some(joints), Some(weights)) = (&corners.joints, &corners.weights) {
+        let bytes: Vec<u8> =
+            (0..count).flat_map(|i| joints[wedges.source[i]].into_iter().flat_map(u16::to_le_bytes)).collect();
+        let view = buffer.view(&bytes, Some(ARRAY_BUFFER));
+        accessors.push(json!({ "bufferView": view, "componentType": UNSIGNED_SHORT, "count": count, "type": "VEC4" }));
+        attributes.insert("JOINTS_0".into(), json!(accessors.len() - 1));
+        let view = buffer.view(&floats((0..count).map(|i| weights[wedges.source[i]])), Some(ARRAY_BUFFER));
+        accessors.push(json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC4" }));
+        attributes.insert("WEIGHTS_0".into(), json!(accessors.len() - 1));
+    }
 
     // One primitive per material, in the order materials first appear; indices in one view.
     let material_of = |f: usize| corners.materials.as_ref().map_or(NO_MATERIAL, |m| m[3 * f]);
@@ -151,8 +161,15 @@ pub fn write_gltf(mut out: impl Write, mesh: &Mesh, binary: bool, folder: Option
         "scenes": [{ "nodes": [0] }],
         "nodes": [{ "mesh": 0 }],
         "meshes": [{ "primitives": primitives }],
-        "accessors": accessors,
     });
+    // A skinned mesh is drawn where its input was, by the node with the skin, in the input's
+    // hierarchy, with the input's animations (skin joints only without one: the joints have no
+    // skin to refer to, and a mesh without them is the input's bind pose).
+    let rig = corners.library.as_ref().and_then(|l| l.rig.as_ref()).filter(|_| corners.joints.is_some());
+    if let Some(rig) = rig {
+        add_rig(&mut document, rig, &mut accessors, &mut buffer);
+    }
+    document["accessors"] = json!(accessors);
     if let Some(library) = &corners.library {
         add_library(&mut document, library, &mut buffer, folder)?;
     }
@@ -185,6 +202,50 @@ pub fn write_gltf(mut out: impl Write, mesh: &Mesh, binary: bool, folder: Option
             json!([{ "byteLength": length, "uri": format!("data:application/octet-stream;base64,{data}") }]);
         serde_json::to_writer_pretty(&mut out, &document).map_err(std::io::Error::other)?;
         out.write_all(b"\n")
+    }
+}
+
+/// Puts `rig`'s nodes, scenes, skins and animations into `document`, its accessors after
+/// `accessors` (the references renumbered to match) and their data into `buffer`.
+fn add_rig(document: &mut Value, rig: &crate::mesh::Rig, accessors: &mut Vec<Value>, buffer: &mut Buffer) {
+    let first = accessors.len() as u64;
+    for carried in &rig.accessors {
+        let mut json = carried.json.clone();
+        json["bufferView"] = json!(buffer.view(&carried.bytes, None));
+        accessors.push(json);
+    }
+    let shift = |value: &mut Value| {
+        if let Some(k) = value.as_u64() {
+            *value = json!(k + first);
+        }
+    };
+    let mut skins = rig.skins.clone();
+    for skin in &mut skins {
+        if let Some(matrices) = skin.get_mut("inverseBindMatrices") {
+            shift(matrices);
+        }
+    }
+    let mut animations = rig.animations.clone();
+    for sampler in animations.iter_mut().filter_map(|a| a.get_mut("samplers")?.as_array_mut()).flatten() {
+        for key in ["input", "output"] {
+            if let Some(value) = sampler.get_mut(key) {
+                shift(value);
+            }
+        }
+    }
+    let mut nodes = rig.nodes.clone();
+    nodes[rig.mesh_node]["mesh"] = json!(0);
+    document["nodes"] = json!(nodes);
+    document["scenes"] = json!(rig.scenes);
+    match rig.scene {
+        Some(scene) => document["scene"] = json!(scene),
+        None => {
+            document.as_object_mut().map(|d| d.remove("scene"));
+        }
+    }
+    document["skins"] = json!(skins);
+    if !animations.is_empty() {
+        document["animations"] = json!(animations);
     }
 }
 

@@ -197,6 +197,19 @@ pub fn write_mesh_to(mut out: impl Write, mesh: &Mesh, format: MeshFormat) -> st
     }
 }
 
+/// The warning for what of `mesh`'s attributes `format` has no place for (OBJ: colours, joints
+/// and weights; PLY: materials, joints and weights), or `None` when it holds them all.
+pub fn unwritten_warning(format: MeshFormat, mesh: &Mesh) -> Option<String> {
+    let holds: &[&str] = match format {
+        MeshFormat::Obj => &["normal", "uv", "material"],
+        MeshFormat::Ply => &["normal", "uv", "color"],
+        _ => return None,
+    };
+    let lost: Vec<&str> = mesh.corners.names().into_iter().filter(|n| !holds.contains(n)).collect();
+    (!lost.is_empty())
+        .then(|| format!("{format:?} has no place for the mesh's {}: write .glb to keep them", lost.join(", ")))
+}
+
 /// The format an output file asks for by its extension, checked before any work is done: a
 /// known extension, and a folder that exists.
 pub fn output_format(path: impl AsRef<Path>) -> Result<MeshFormat, MeshError> {

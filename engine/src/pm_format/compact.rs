@@ -10,7 +10,8 @@ use std::collections::HashMap;
 use super::bits::{BitReader, BitWriter, OutOfBits, Rice, width_for};
 use super::grid::{Grid, MAX_BITS, Quantization, from_octahedral, octahedral};
 use super::{
-    ATTRIBUTE_COLOR, ATTRIBUTE_MATERIAL, ATTRIBUTE_NORMAL, ATTRIBUTE_UV, ATTRIBUTE_UV_ORIGIN_TOP, Reader, put_varint,
+    ATTRIBUTE_COLOR, ATTRIBUTE_MATERIAL, ATTRIBUTE_NORMAL, ATTRIBUTE_SKIN, ATTRIBUTE_UV, ATTRIBUTE_UV_ORIGIN_TOP,
+    Reader, put_varint,
 };
 use crate::error::MeshError;
 use crate::mesh::{CornerAttributes, Mesh, NO_MATERIAL};
@@ -257,12 +258,14 @@ pub(super) fn decode_geometry(
 const UNSET: u32 = u32::MAX;
 
 /// What a value is made of, as grid integers: octahedral normal, texture coordinates, colour,
-/// material (−1 for none), those present.
+/// material (−1 for none), the four joints and the four weights (in 255ths summing to 255, as a
+/// GPU's normalised bytes hold them; a joint of weight 0 is written as 0), those present.
 struct Layout {
     normal: bool,
     uv: bool,
     color: bool,
     material: bool,
+    skin: bool,
 }
 
 impl Layout {
@@ -272,16 +275,20 @@ impl Layout {
             uv: mask & ATTRIBUTE_UV != 0,
             color: mask & ATTRIBUTE_COLOR != 0,
             material: mask & ATTRIBUTE_MATERIAL != 0,
+            skin: mask & ATTRIBUTE_SKIN != 0,
         }
     }
 
-    /// The code each integer of a value uses: 0 normal, 1 uv, 2 colour, 3 material.
+    /// The code each integer of a value uses: 0 normal, 1 uv, 2 colour, 3 material, 4 joint,
+    /// 5 weight.
     fn kinds(&self) -> Vec<usize> {
         let mut k = Vec::new();
         k.extend(std::iter::repeat_n(0, 2 * self.normal as usize));
         k.extend(std::iter::repeat_n(1, 2 * self.uv as usize));
         k.extend(std::iter::repeat_n(2, 4 * self.color as usize));
         k.extend(std::iter::repeat_n(3, self.material as usize));
+        k.extend(std::iter::repeat_n(4, 4 * self.skin as usize));
+        k.extend(std::iter::repeat_n(5, 4 * self.skin as usize));
         k
     }
 }
@@ -291,7 +298,7 @@ impl Layout {
 struct AttributeState {
     table: Vec<Vec<i64>>,
     corners: Vec<[u32; 3]>,
-    codes: [Rice; 4],
+    codes: [Rice; 6],
     kinds: Vec<usize>,
     list: Vec<u32>,
     /// Writer only: the table index of each value.
@@ -427,6 +434,11 @@ pub(super) fn encode_attributes(
         if let Some(m) = &v.materials {
             q.push(if m[id] == NO_MATERIAL { -1 } else { m[id] as i64 });
         }
+        if let (Some(j), Some(w)) = (&v.joints, &v.weights) {
+            let weights = weight_bytes(w[id]);
+            q.extend((0..4).map(|k| if weights[k] == 0 { 0 } else { i64::from(j[id][k]) }));
+            q.extend(weights);
+        }
         q
     };
     let base = pm.base();
@@ -467,6 +479,25 @@ pub(super) fn encode_attributes(
     let bytes = w.finish();
     put_varint(out, bytes.len() as u64);
     out.extend_from_slice(&bytes);
+}
+
+/// Skin weights in 255ths that sum to 255, each within one 255th of its share (the largest
+/// remainders rounded up), so that the weights read back are normalised; all zero for a corner
+/// with no positive weight.
+fn weight_bytes(w: [f32; 4]) -> [i64; 4] {
+    let total: f64 = w.iter().map(|&x| f64::from(x.max(0.0))).sum();
+    if total.is_nan() || total <= 0.0 {
+        return [0; 4];
+    }
+    let share = w.map(|x| f64::from(x.max(0.0)) / total * 255.0);
+    let mut q = share.map(|x| x.floor() as i64);
+    let mut order = [0, 1, 2, 3];
+    order.sort_by(|&a, &b| (share[b] - share[b].floor()).total_cmp(&(share[a] - share[a].floor())).then(a.cmp(&b)));
+    let missing = 255 - q.iter().sum::<i64>();
+    for &k in order.iter().take(missing.clamp(0, 4) as usize) {
+        q[k] += 1;
+    }
+    q
 }
 
 /// Marks each moved face's corner at `vt` unset; returns (corner, value it had).
@@ -571,6 +602,8 @@ pub(super) fn decode_attributes(
         colors: layout.color.then(Vec::new),
         uv_origin_top: mask & ATTRIBUTE_UV_ORIGIN_TOP != 0,
         materials: layout.material.then(Vec::new),
+        joints: layout.skin.then(Vec::new),
+        weights: layout.skin.then(Vec::new),
         library: None,
     };
     for (t, q) in state.table.iter().enumerate() {
@@ -592,6 +625,14 @@ pub(super) fn decode_attributes(
                 m => return Err(MeshError::parse(path, format!("attribute value {t}"), format!("material {m}"))),
             };
             m.push(material);
+            rest = &rest[1..];
+        }
+        if let (Some(j), Some(w)) = (&mut values.joints, &mut values.weights) {
+            let joints: Option<Vec<u16>> = rest[..4].iter().map(|&c| u16::try_from(c).ok()).collect();
+            let Some(joints) = joints else { return Err(bad("joint")) };
+            let weights = on_grid(&mut &rest[4..8], 4, 8).ok_or_else(|| bad("weight"))?;
+            j.push([joints[0], joints[1], joints[2], joints[3]]);
+            w.push(std::array::from_fn(|k| weights[k] as f32 / 255.0));
         }
     }
     Ok((PmAttributes { values, base: base_corners, splits }, normal_bits, uvs, colors))

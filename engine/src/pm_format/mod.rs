@@ -14,7 +14,7 @@ pub use grid::{Grid, Precision, Quantization};
 use std::collections::HashMap;
 
 use crate::error::MeshError;
-use crate::mesh::{CornerAttributes, Image, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL};
+use crate::mesh::{CornerAttributes, Image, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL, Rig, RigAccessor};
 use crate::pm::{NO_VERTEX, PmAttributes, ProgressiveMesh, SplitAttributes, StreamedSplit};
 
 /// First four bytes of a `.pm` file.
@@ -29,6 +29,8 @@ const ATTRIBUTE_UV: u8 = 2;
 const ATTRIBUTE_COLOR: u8 = 4;
 const ATTRIBUTE_UV_ORIGIN_TOP: u8 = 8;
 const ATTRIBUTE_MATERIAL: u8 = 16;
+/// Joints and weights (glTF JOINTS_0 and WEIGHTS_0), always together.
+const ATTRIBUTE_SKIN: u8 = 32;
 /// Header flag: the materials, textures and images the material numbers refer to follow the
 /// attribute section, as JSON (versions 2 and 3).
 const HAS_MATERIALS: u16 = 2;
@@ -192,13 +194,13 @@ fn attribute_mask(v: &CornerAttributes) -> u8 {
         | bit(v.colors.is_some(), ATTRIBUTE_COLOR)
         | bit(v.uv_origin_top, ATTRIBUTE_UV_ORIGIN_TOP)
         | bit(v.materials.is_some(), ATTRIBUTE_MATERIAL)
+        | bit(v.joints.is_some(), ATTRIBUTE_SKIN)
 }
 
 /// Refuses a mask with unknown bits or without any attribute.
 fn check_mask(r: &Reader, mask: u8) -> Result<(), MeshError> {
-    if mask & !(ATTRIBUTE_NORMAL | ATTRIBUTE_UV | ATTRIBUTE_COLOR | ATTRIBUTE_UV_ORIGIN_TOP | ATTRIBUTE_MATERIAL) != 0
-        || mask & (ATTRIBUTE_NORMAL | ATTRIBUTE_UV | ATTRIBUTE_COLOR | ATTRIBUTE_MATERIAL) == 0
-    {
+    let values = ATTRIBUTE_NORMAL | ATTRIBUTE_UV | ATTRIBUTE_COLOR | ATTRIBUTE_MATERIAL | ATTRIBUTE_SKIN;
+    if mask & !(values | ATTRIBUTE_UV_ORIGIN_TOP) != 0 || mask & values == 0 {
         return Err(r.error(format!("invalid attribute mask {mask:#04x}")));
     }
     Ok(())
@@ -210,14 +212,17 @@ fn check_mask(r: &Reader, mask: u8) -> Result<(), MeshError> {
 fn encode_attributes(out: &mut Vec<u8>, pm: &ProgressiveMesh, a: &PmAttributes) {
     let v = &a.values;
     let mask = attribute_mask(v);
-    // A value as the 4-byte words it is written as: floats, then the material number.
+    // A value as the 4-byte words it is written as: floats, the material number, then the joints
+    // (one word each) and weights.
     let floats = |k: u32| -> Vec<u32> {
         let k = k as usize;
-        let mut f = Vec::with_capacity(10);
+        let mut f = Vec::with_capacity(18);
         f.extend(v.normals.iter().flat_map(|n| n[k].map(f32::to_bits)));
         f.extend(v.uvs.iter().flat_map(|u| u[k].map(f32::to_bits)));
         f.extend(v.colors.iter().flat_map(|c| c[k].map(f32::to_bits)));
         f.extend(v.materials.iter().map(|m| m[k]));
+        f.extend(v.joints.iter().flat_map(|j| j[k].map(u32::from)));
+        f.extend(v.weights.iter().flat_map(|w| w[k].map(f32::to_bits)));
         f
     };
     // Every index in the order it is written, renumbered to distinct values in order of first use.
@@ -269,7 +274,8 @@ fn decode_attributes(r: &mut Reader, base_faces: usize, added: &[usize]) -> Resu
     let width = 3 * (mask & ATTRIBUTE_NORMAL != 0) as usize
         + 2 * (mask & ATTRIBUTE_UV != 0) as usize
         + 4 * (mask & ATTRIBUTE_COLOR != 0) as usize
-        + (mask & ATTRIBUTE_MATERIAL != 0) as usize;
+        + (mask & ATTRIBUTE_MATERIAL != 0) as usize
+        + 8 * (mask & ATTRIBUTE_SKIN != 0) as usize;
     let count = r.varint()?;
     // Each value takes 4 bytes per float: a count the remaining bytes cannot hold is refused
     // before anything is allocated from it.
@@ -282,6 +288,8 @@ fn decode_attributes(r: &mut Reader, base_faces: usize, added: &[usize]) -> Resu
         colors: (mask & ATTRIBUTE_COLOR != 0).then(Vec::new),
         uv_origin_top: mask & ATTRIBUTE_UV_ORIGIN_TOP != 0,
         materials: (mask & ATTRIBUTE_MATERIAL != 0).then(Vec::new),
+        joints: (mask & ATTRIBUTE_SKIN != 0).then(Vec::new),
+        weights: (mask & ATTRIBUTE_SKIN != 0).then(Vec::new),
         library: None,
     };
     for _ in 0..count {
@@ -296,6 +304,16 @@ fn decode_attributes(r: &mut Reader, base_faces: usize, added: &[usize]) -> Resu
         }
         if let Some(m) = &mut values.materials {
             m.push(r.u32()?);
+        }
+        if let Some(j) = &mut values.joints {
+            let mut joint = [0u16; 4];
+            for x in &mut joint {
+                *x = u16::try_from(r.u32()?).map_err(|_| r.error("a joint number above 65535".to_string()))?;
+            }
+            j.push(joint);
+        }
+        if let Some(w) = &mut values.weights {
+            w.push([r.f32()?, r.f32()?, r.f32()?, r.f32()?]);
         }
     }
     let index = |r: &mut Reader| -> Result<u32, MeshError> {
@@ -359,7 +377,7 @@ fn library_to_json(library: &MaterialLibrary) -> serde_json::Value {
             entry
         })
         .collect();
-    serde_json::json!({
+    let mut json = serde_json::json!({
         "materials": library.materials,
         "textures": library.textures,
         "samplers": library.samplers,
@@ -367,6 +385,50 @@ fn library_to_json(library: &MaterialLibrary) -> serde_json::Value {
         "extensions_used": library.extensions_used,
         "extensions_required": library.extensions_required,
         "not_carried": library.not_carried,
+    });
+    // Only when there is one: a file without a skeleton is written as before skeletons were kept.
+    if let Some(rig) = &library.rig {
+        json["rig"] = rig_to_json(rig);
+    }
+    json
+}
+
+/// A [`Rig`] as the `.pm` file keeps it: glTF's JSON, each accessor's bytes in base64.
+fn rig_to_json(rig: &Rig) -> serde_json::Value {
+    use base64::Engine as _;
+    let accessors: Vec<serde_json::Value> = rig
+        .accessors
+        .iter()
+        .map(|a| serde_json::json!({ "json": a.json, "bytes": base64::engine::general_purpose::STANDARD.encode(&a.bytes) }))
+        .collect();
+    serde_json::json!({
+        "nodes": rig.nodes,
+        "mesh_node": rig.mesh_node,
+        "scenes": rig.scenes,
+        "scene": rig.scene,
+        "skins": rig.skins,
+        "animations": rig.animations,
+        "accessors": accessors,
+    })
+}
+
+/// Reads [`rig_to_json`]'s form back.
+fn rig_from_json(json: &serde_json::Value) -> Option<Rig> {
+    use base64::Engine as _;
+    let array = |key: &str| json.get(key)?.as_array().cloned();
+    let mut accessors = Vec::new();
+    for entry in array("accessors")? {
+        let bytes = base64::engine::general_purpose::STANDARD.decode(entry.get("bytes")?.as_str()?).ok()?;
+        accessors.push(RigAccessor { json: entry.get("json")?.clone(), bytes });
+    }
+    Some(Rig {
+        nodes: array("nodes")?,
+        mesh_node: usize::try_from(json.get("mesh_node")?.as_u64()?).ok()?,
+        scenes: array("scenes")?,
+        scene: json.get("scene").and_then(|s| s.as_u64()).map(|s| s as usize),
+        skins: array("skins")?,
+        animations: array("animations")?,
+        accessors,
     })
 }
 
@@ -408,6 +470,10 @@ fn library_from_json(json: &serde_json::Value) -> Option<MaterialLibrary> {
         extensions_used: strings("extensions_used")?,
         extensions_required: strings("extensions_required")?,
         not_carried: strings("not_carried")?,
+        rig: match json.get("rig") {
+            None | Some(serde_json::Value::Null) => None,
+            Some(rig) => Some(rig_from_json(rig)?),
+        },
     })
 }
 

@@ -286,10 +286,47 @@ fn interpolate_corners(
             .as_ref()
             .map(|v| corners().map(|e| if e.0 == e.1 { v[e.0] } else { unit(mean(v, e)) }).collect()),
         colors: parent.colors.as_ref().map(|v| corners().map(|e| mean(v, e)).collect()),
+        joints: parent.joints.as_ref().map(|j| {
+            let w = parent.weights.as_ref().expect("joints come with weights");
+            corners().map(|e| blend_skin(j, w, e).0).collect()
+        }),
+        weights: parent.weights.as_ref().map(|w| {
+            let j = parent.joints.as_ref().expect("weights come with joints");
+            corners().map(|e| blend_skin(j, w, e).1).collect()
+        }),
         materials: parent.materials.as_ref().map(|m| corners().map(|(x, _)| m[x]).collect()),
         library: parent.library.clone(),
         uv_origin_top: parent.uv_origin_top,
     }
+}
+
+/// The skin of a midpoint between corners `x` and `y`: each joint's weight averaged over the two,
+/// the four heaviest kept and their weights scaled to sum to 1 (a corner's own skin unchanged).
+fn blend_skin(joints: &[[u16; 4]], weights: &[[f32; 4]], (x, y): (usize, usize)) -> ([u16; 4], [f32; 4]) {
+    if x == y {
+        return (joints[x], weights[x]);
+    }
+    let mut sum: Vec<(u16, f32)> = Vec::with_capacity(8);
+    for c in [x, y] {
+        for (&j, &w) in joints[c].iter().zip(&weights[c]) {
+            if w == 0.0 {
+                continue;
+            }
+            match sum.iter_mut().find(|s| s.0 == j) {
+                Some(s) => s.1 += 0.5 * w,
+                None => sum.push((j, 0.5 * w)),
+            }
+        }
+    }
+    sum.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+    sum.truncate(4);
+    let total: f32 = sum.iter().map(|s| s.1).sum();
+    let (mut j, mut w) = ([0u16; 4], [0f32; 4]);
+    for (k, &(joint, weight)) in sum.iter().enumerate() {
+        j[k] = joint;
+        w[k] = if total > 0.0 { weight / total } else { 0.0 };
+    }
+    (j, w)
 }
 
 /// Uniform modified-butterfly subdivision: every edge split, every face 1→4.

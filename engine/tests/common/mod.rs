@@ -74,6 +74,17 @@ pub fn assert_compact_round_trip(name: &str, pm: &meshlod_engine::pm::Progressiv
                 assert!((0..4).all(|k| close(s[k], t[k], g.step[k])), "{name}: colour {s:?} → {t:?}");
             }
         }
+        // Skins: weights within a 255th, normalised, the joints of every weight kept.
+        if let (Some(jx), Some(wx), Some(jy), Some(wy)) = (&x.joints, &x.weights, &y.joints, &y.weights) {
+            for k in 0..jx.len() {
+                let total: f32 = wx[k].iter().sum();
+                assert!((wy[k].iter().sum::<f32>() - 1.0).abs() < 1e-5, "{name}: weights {:?}", wy[k]);
+                for i in 0..4 {
+                    assert!((wx[k][i] / total - wy[k][i]).abs() <= 1.0 / 255.0 + 1e-6, "{name}: {wx:?} → {wy:?}");
+                    assert!(wy[k][i] == 0.0 || jx[k][i] == jy[k][i], "{name}: joints {:?} → {:?}", jx[k], jy[k]);
+                }
+            }
+        }
         if let (Some(n), Some(m)) = (&x.normals, &y.normals) {
             for (s, t) in n.iter().zip(m) {
                 let length = (s.iter().map(|c| (*c as f64).powi(2)).sum::<f64>()).sqrt();
