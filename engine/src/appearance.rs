@@ -1,12 +1,17 @@
 //! How far a level of detail's texture coordinates and normals are from the input's: for points
 //! spread over the LOD by area, the distance in texture space between the LOD's interpolated
-//! texture coordinates and the input's at the nearest input point, and the angle between their
-//! interpolated normals.
+//! texture coordinates and the input's at the nearest input point on the same chart, and the angle
+//! between their interpolated normals at the nearest input point.
 //!
-//! Where the nearest input point lies on a seam (or a hard edge), the input has two values there;
-//! every input triangle as near as the nearest (to a relative 1e-9 of the bounding-box diagonal) is
-//! a candidate and the closest value counts, so a sample is compared with its own chart, not with
-//! the chart across the seam. Sampling is deterministic for a seed.
+//! A chart is a piece of the input whose faces join along edges with the same texture coordinates
+//! on both sides. A LOD face belongs to the chart(s) its three corners' values come from (a
+//! simplifier that keeps values, as meshlod and meshoptimizer do, takes them from the input's
+//! corners; where its corners have no chart in common, or a value the input never had, the face
+//! is compared with every chart). So a sample on a garment's outer layer is compared with that
+//! layer, not with the lining a hair's breadth beneath it. Where the nearest input point lies on a
+//! seam (or a hard edge), the input has two values there; every input triangle as near as the
+//! nearest (to a relative 1e-9 of the bounding-box diagonal) is a candidate and the closest value
+//! counts, so a sample is compared with its own side. Sampling is deterministic for a seed.
 
 use glam::{DVec2, DVec3};
 
@@ -30,9 +35,13 @@ pub struct Spread {
 pub struct AppearanceError {
     /// Points sampled on the LOD.
     pub samples: usize,
-    /// Texture-space distance in texels of a square texture of the given size (both meshes need
-    /// texture coordinates).
+    /// Texture-space distance in texels of a square texture of the given size, against the
+    /// nearest point of the sample's own chart (both meshes need texture coordinates).
     pub uv_texels: Option<Spread>,
+    /// The same against the nearest input point of any chart: it also sees a chart that spread
+    /// over its neighbours' place (an eye's texture over the cheek), and it also charges a
+    /// sample the layer beneath it (a lining's values under a garment).
+    pub uv_texels_any_chart: Option<Spread>,
     /// Angle between the normals, degrees (both meshes need normals).
     pub normal_degrees: Option<Spread>,
 }
@@ -96,8 +105,9 @@ pub fn appearance_error(
     }
     let with_uv = input.corners.uvs.is_some() && lod.corners.uvs.is_some();
     let with_normal = input.corners.normals.is_some() && lod.corners.normals.is_some();
+    let charts = if with_uv { Charts::new(input) } else { None };
     let mut rng = SplitMix64::new(seed);
-    let (mut uv_errors, mut normal_errors) = (Vec::new(), Vec::new());
+    let (mut uv_errors, mut uv_any_errors, mut normal_errors) = (Vec::new(), Vec::new(), Vec::new());
     let mut candidates = Vec::new();
     let mut hint = None;
     for _ in 0..samples {
@@ -134,13 +144,158 @@ pub fn appearance_error(
             }
         }
         if with_uv && best_uv.is_finite() {
+            uv_any_errors.push(best_uv);
+        }
+        // On the face's own chart(s), when it has one: the nearest point there instead.
+        if let (Some(charts), Some(out)) = (&charts, uv_out)
+            && let Some(own) = charts.of_face(lod, f)
+        {
+            let d = charts.nearest_uv_distance(input, &own, p, out);
+            if d.is_finite() {
+                best_uv = d * texture_size;
+            }
+        }
+        if with_uv && best_uv.is_finite() {
             uv_errors.push(best_uv);
         }
         if with_normal && best_normal.is_finite() {
             normal_errors.push(best_normal);
         }
     }
-    Some(AppearanceError { samples, uv_texels: spread(uv_errors), normal_degrees: spread(normal_errors) })
+    Some(AppearanceError {
+        samples,
+        uv_texels: spread(uv_errors),
+        uv_texels_any_chart: spread(uv_any_errors),
+        normal_degrees: spread(normal_errors),
+    })
+}
+
+/// The input's charts ([module docs](self)), each with its own tree for nearest-point queries.
+struct Charts {
+    /// Per chart: its tree and, per face of the tree, the input face (`None` for a chart without
+    /// area).
+    trees: Vec<Option<(TriangleBvh, Vec<usize>)>>,
+    /// Per texture coordinate value (its bits): the charts that have it at some corner.
+    by_value: std::collections::HashMap<[u32; 2], Vec<u32>>,
+}
+
+impl Charts {
+    fn new(input: &Mesh) -> Option<Charts> {
+        let uvs = input.corners.uvs.as_ref()?;
+        let bits = |k: usize| uvs[k].map(f32::to_bits);
+        // Faces joined across every edge whose two corners agree on both sides.
+        let n = input.face_count();
+        let mut parent: Vec<usize> = (0..n).collect();
+        fn root(parent: &mut [usize], mut x: usize) -> usize {
+            while parent[x] != x {
+                parent[x] = parent[parent[x]];
+                x = parent[x];
+            }
+            x
+        }
+        // The first face seen at each edge; a later one joins it when the values agree (a
+        // non-manifold edge's third face is compared with the first).
+        let mut first_face: std::collections::HashMap<(u32, u32), usize> = std::collections::HashMap::new();
+        for (f, t) in input.triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                let key = (a.min(b), a.max(b));
+                match first_face.get(&key) {
+                    Some(&g) => {
+                        let (fa, fb) = corner_pair(input, f, key);
+                        let (ga, gb) = corner_pair(input, g, key);
+                        if bits(fa) == bits(ga) && bits(fb) == bits(gb) {
+                            let (x, y) = (root(&mut parent, f), root(&mut parent, g));
+                            parent[x] = y;
+                        }
+                    }
+                    None => {
+                        first_face.insert(key, f);
+                    }
+                }
+            }
+        }
+        let mut chart_of_root: std::collections::HashMap<usize, u32> = std::collections::HashMap::new();
+        let mut faces_of: Vec<Vec<usize>> = Vec::new();
+        let chart: Vec<u32> = (0..n)
+            .map(|f| {
+                let r = root(&mut parent, f);
+                let c = *chart_of_root.entry(r).or_insert_with(|| {
+                    faces_of.push(Vec::new());
+                    faces_of.len() as u32 - 1
+                });
+                faces_of[c as usize].push(f);
+                c
+            })
+            .collect();
+        let mut by_value: std::collections::HashMap<[u32; 2], Vec<u32>> = std::collections::HashMap::new();
+        for k in 0..3 * n {
+            let list = by_value.entry(bits(k)).or_default();
+            if !list.contains(&chart[k / 3]) {
+                list.push(chart[k / 3]);
+            }
+        }
+        let mut trees = Vec::with_capacity(faces_of.len());
+        let mut local = vec![u32::MAX; input.vertex_count()];
+        for faces in faces_of {
+            // The chart's own vertices only (a chart is often a small part of a large mesh).
+            let mut piece = Mesh::default();
+            for &f in &faces {
+                let t = input.triangles[f].map(|v| {
+                    if local[v as usize] == u32::MAX {
+                        local[v as usize] = piece.positions.len() as u32;
+                        piece.positions.push(input.positions[v as usize]);
+                    }
+                    local[v as usize]
+                });
+                piece.triangles.push(t);
+            }
+            for &f in &faces {
+                input.triangles[f].iter().for_each(|&v| local[v as usize] = u32::MAX);
+            }
+            trees.push(TriangleBvh::new(&piece).map(|tree| (tree, faces)));
+        }
+        Some(Charts { trees, by_value })
+    }
+
+    /// The charts LOD face `f`'s three corner values all come from; `None` when they have none in
+    /// common (or a value is not the input's).
+    fn of_face(&self, lod: &Mesh, f: usize) -> Option<Vec<u32>> {
+        let uvs = lod.corners.uvs.as_ref()?;
+        let mut common: Vec<u32> = self.by_value.get(&uvs[3 * f].map(f32::to_bits))?.clone();
+        for k in 1..3 {
+            let these = self.by_value.get(&uvs[3 * f + k].map(f32::to_bits))?;
+            common.retain(|c| these.contains(c));
+        }
+        (!common.is_empty()).then_some(common)
+    }
+
+    /// The texture-space distance between `out` and the input's value at the point of `charts`
+    /// nearest to `p` (the nearest chart's, when there are several).
+    fn nearest_uv_distance(&self, input: &Mesh, charts: &[u32], p: DVec3, out: DVec2) -> f64 {
+        let mut best = (f64::INFINITY, f64::INFINITY);
+        for &c in charts {
+            let Some((tree, faces)) = &self.trees[c as usize] else { continue };
+            let nearest = tree.closest_point(p, None);
+            let t = tree.slot_corners(nearest.slot);
+            let g = faces[tree.slot_face(nearest.slot) as usize];
+            let q = closest_point_on_triangle(p, t[0], t[1], t[2]);
+            let b = barycentric(q, t).unwrap_or([1.0, 0.0, 0.0]);
+            let Some(value) = uv_at(input, g, b) else { continue };
+            let candidate = (nearest.distance(), (out - value).length());
+            if candidate.0 < best.0 {
+                best = candidate;
+            }
+        }
+        best.1
+    }
+}
+
+/// The corners of input face `g` at the lower and the higher vertex of edge `key`.
+fn corner_pair(input: &Mesh, g: usize, key: (u32, u32)) -> (usize, usize) {
+    let t = input.triangles[g];
+    let at = |v: u32| 3 * g + t.iter().position(|&x| x == v).expect("the face has the edge");
+    (at(key.0), at(key.1))
 }
 
 #[cfg(test)]
@@ -185,5 +340,32 @@ mod tests {
         uvs[3..6].iter_mut().for_each(|uv| uv[0] += 5.0);
         let error = appearance_error(&a, &a, 2000, 1024.0, 7).unwrap().uv_texels.unwrap();
         assert!(error.max_sampled < 1e-6, "{error:?}");
+    }
+
+    #[test]
+    fn a_layer_is_compared_with_its_own_chart_not_the_one_beneath() {
+        // Two layers a millimetre apart (a garment and its lining), each its own chart; the LOD
+        // keeps the top layer's values but sags to just above the lining.
+        let top = square(1.0);
+        let mut lining = square(1.0);
+        lining.positions.iter_mut().for_each(|p| p[2] = -0.001);
+        lining.corners.uvs.as_mut().unwrap().iter_mut().for_each(|uv| uv[1] += 3.0);
+        let mut input = top.clone();
+        input.positions.extend(&lining.positions);
+        input.triangles.extend(lining.triangles.iter().map(|t| t.map(|v| v + 4)));
+        let uvs = input.corners.uvs.as_mut().unwrap();
+        uvs.extend(lining.corners.uvs.as_ref().unwrap());
+        let normals = input.corners.normals.as_mut().unwrap();
+        normals.extend(lining.corners.normals.as_ref().unwrap());
+        let mut lod = top.clone();
+        lod.positions.iter_mut().for_each(|p| p[2] = -0.0009);
+        let measured = appearance_error(&input, &lod, 1000, 1024.0, 3).unwrap();
+        let error = measured.uv_texels.unwrap();
+        assert!(error.max_sampled < 1e-3, "{error:?}");
+        assert!(measured.uv_texels_any_chart.unwrap().mean > 1000.0, "{measured:?}");
+        // A value the input never had has no chart: the nearest point decides, as before.
+        lod.corners.uvs.as_mut().unwrap().iter_mut().for_each(|uv| uv[0] += 0.25);
+        let error = appearance_error(&input, &lod, 1000, 1024.0, 3).unwrap().uv_texels.unwrap();
+        assert!(error.mean > 1000.0, "compared with the lining: {error:?}");
     }
 }

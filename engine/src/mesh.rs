@@ -50,6 +50,9 @@ pub struct CornerAttributes {
     pub uv_origin_top: bool,
     /// Normals per corner.
     pub normals: Option<Vec<[f32; 3]>>,
+    /// Tangents per corner (glTF TANGENT): a unit vector along the texture's u direction and, as
+    /// the fourth component, ±1 for the handedness of the bitangent.
+    pub tangents: Option<Vec<[f32; 4]>>,
     /// Colours per corner, RGBA in [0, 1].
     pub colors: Option<Vec<[f32; 4]>>,
     /// Skinning per corner (glTF JOINTS_0): the four joints, as indices into the rig's skin's
@@ -212,6 +215,9 @@ impl CornerAttributes {
         if self.uvs.is_some() {
             names.push("uv");
         }
+        if self.tangents.is_some() {
+            names.push("tangent");
+        }
         if self.colors.is_some() {
             names.push("color");
         }
@@ -231,6 +237,7 @@ impl CornerAttributes {
     pub fn is_empty(&self) -> bool {
         self.uvs.is_none()
             && self.normals.is_none()
+            && self.tangents.is_none()
             && self.colors.is_none()
             && self.joints.is_none()
             && self.weights.is_none()
@@ -240,7 +247,11 @@ impl CornerAttributes {
     /// Whether there is a value besides the material (what splits a vertex in a format without
     /// materials).
     fn has_values(&self) -> bool {
-        self.uvs.is_some() || self.normals.is_some() || self.colors.is_some() || self.joints.is_some()
+        self.uvs.is_some()
+            || self.normals.is_some()
+            || self.tangents.is_some()
+            || self.colors.is_some()
+            || self.joints.is_some()
     }
 
     /// The attributes of the corners `kept` (corner indices), in that order.
@@ -251,6 +262,7 @@ impl CornerAttributes {
         CornerAttributes {
             uvs: pick(&self.uvs, kept.clone()),
             normals: pick(&self.normals, kept.clone()),
+            tangents: pick(&self.tangents, kept.clone()),
             colors: pick(&self.colors, kept.clone()),
             joints: pick(&self.joints, kept.clone()),
             weights: pick(&self.weights, kept.clone()),
@@ -267,6 +279,7 @@ impl CornerAttributes {
         }
         same(&self.uvs, a, b)
             && same(&self.normals, a, b)
+            && same(&self.tangents, a, b)
             && same(&self.colors, a, b)
             && same(&self.weights, a, b)
             && self.joints.as_ref().is_none_or(|j| j[a] == j[b])
@@ -301,6 +314,7 @@ impl CornerAttributes {
             let mut bits = Vec::with_capacity(9);
             bits.extend(self.normals.iter().flat_map(|n| n[k].map(f32::to_bits)));
             bits.extend(self.uvs.iter().flat_map(|u| u[k].map(f32::to_bits)));
+            bits.extend(self.tangents.iter().flat_map(|t| t[k].map(f32::to_bits)));
             bits.extend(self.colors.iter().flat_map(|c| c[k].map(f32::to_bits)));
             bits.extend(self.joints.iter().flat_map(|j| j[k].map(u32::from)));
             bits.extend(self.weights.iter().flat_map(|w| w[k].map(f32::to_bits)));
@@ -355,6 +369,7 @@ impl CornerAttributes {
         }
         check(&self.uvs, "uv", corner_count)?;
         check(&self.normals, "normal", corner_count)?;
+        check(&self.tangents, "tangent", corner_count)?;
         check(&self.colors, "color", corner_count)?;
         check(&self.weights, "weights", corner_count)?;
         match &self.joints {

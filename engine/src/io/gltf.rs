@@ -4,8 +4,8 @@
 //! Every triangle primitive (TRIANGLES, and TRIANGLE_STRIP / TRIANGLE_FAN unrolled) of every mesh
 //! instance in the default scene (else the first, else every mesh once) is read, placed by its
 //! node's world transform (normals by the inverse transpose; mirrored nodes keep their faces
-//! counter-clockwise) and merged into one mesh. Kept per corner: NORMAL, TEXCOORD_0 and COLOR_0,
-//! each when every primitive has it. glTF splits a vertex wherever its attributes differ (seams,
+//! counter-clockwise) and merged into one mesh. Kept per corner: NORMAL, TANGENT, TEXCOORD_0 and
+//! COLOR_0, each when every primitive has it, and JOINTS_0 / WEIGHTS_0 of a skinned asset. glTF splits a vertex wherever its attributes differ (seams,
 //! hard edges) and exporters often between primitives too: vertices at bit-identical positions are
 //! joined ([`Mesh::weld_positions`]), so the surface is one piece with seams, not cut open.
 //! POINTS and LINES primitives are not surface and are left out.
@@ -43,6 +43,7 @@ struct Part {
     positions: Vec<[f32; 3]>,
     triangles: Vec<[u32; 3]>,
     normals: Option<Vec<[f32; 3]>>,
+    tangents: Option<Vec<[f32; 4]>>,
     uvs: Option<Vec<[f32; 2]>>,
     colors: Option<Vec<[f32; 4]>>,
     joints: Option<Vec<[u16; 4]>>,
@@ -274,7 +275,7 @@ fn library(
             for (semantic, _) in primitive.attributes() {
                 let name = semantic.to_string();
                 let skin = matches!(name.as_str(), "JOINTS_0" | "WEIGHTS_0") && rig.is_some();
-                if !skin && !matches!(name.as_str(), "POSITION" | "NORMAL" | "TEXCOORD_0" | "COLOR_0") {
+                if !skin && !matches!(name.as_str(), "POSITION" | "NORMAL" | "TANGENT" | "TEXCOORD_0" | "COLOR_0") {
                     note(format!("{name} values"));
                 }
             }
@@ -494,6 +495,7 @@ fn read_primitive(
         if got == n { Ok(()) } else { Err(format!("{what} has {got} values for {n} positions")) }
     };
     let normals: Option<Vec<[f32; 3]>> = reader.read_normals().map(|r| r.collect());
+    let tangents: Option<Vec<[f32; 4]>> = reader.read_tangents().map(|r| r.collect());
     let uvs: Option<Vec<[f32; 2]>> = reader.read_tex_coords(0).map(|r| r.into_f32().collect());
     let colors: Option<Vec<[f32; 4]>> = reader.read_colors(0).map(|r| r.into_rgba_f32().collect());
     if let Some(v) = &normals {
@@ -501,6 +503,9 @@ fn read_primitive(
     }
     if let Some(v) = &uvs {
         same_count("TEXCOORD_0", v.len())?;
+    }
+    if let Some(v) = &tangents {
+        same_count("TANGENT", v.len())?;
     }
     if let Some(v) = &colors {
         same_count("COLOR_0", v.len())?;
@@ -550,17 +555,33 @@ fn read_primitive(
                 .collect(),
         )
     });
+    // A tangent turns with the surface (the linear part), and a mirror flips its handedness.
+    let handedness = if linear.determinant() < 0.0 { -1.0 } else { 1.0 };
+    let tangents = tangents.map(|v| {
+        let placed: Vec<[f32; 4]> = v
+            .iter()
+            .map(|t| {
+                let [x, y, z] = (linear * DVec3::new(t[0].into(), t[1].into(), t[2].into()))
+                    .normalize_or_zero()
+                    .as_vec3()
+                    .to_array();
+                [x, y, z, t[3] * handedness]
+            })
+            .collect();
+        triangles.iter().flatten().map(|&i| placed[i as usize]).collect()
+    });
     let uvs = uvs.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let colors = colors.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let joints = joints.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let weights = weights.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let material = primitive.material().index().map_or(NO_MATERIAL, |m| m as u32);
-    Ok(Part { positions, triangles, normals, uvs, colors, joints, weights, material })
+    Ok(Part { positions, triangles, normals, tangents, uvs, colors, joints, weights, material })
 }
 
 /// Joins the parts into one mesh; an attribute is kept when every part has it.
 fn merge(parts: Vec<Part>, library: MaterialLibrary, path: &Path) -> Result<Mesh, MeshError> {
     let keep_normals = parts.iter().all(|p| p.normals.is_some());
+    let keep_tangents = parts.iter().all(|p| p.tangents.is_some());
     let keep_uvs = parts.iter().all(|p| p.uvs.is_some());
     let keep_colors = parts.iter().all(|p| p.colors.is_some());
     let mut library = library;
@@ -571,6 +592,7 @@ fn merge(parts: Vec<Part>, library: MaterialLibrary, path: &Path) -> Result<Mesh
     let mut mesh = Mesh::default();
     let mut corners = CornerAttributes {
         normals: keep_normals.then(Vec::new),
+        tangents: keep_tangents.then(Vec::new),
         uvs: keep_uvs.then(Vec::new),
         colors: keep_colors.then(Vec::new),
         joints: keep_skin.then(Vec::new),
@@ -587,6 +609,9 @@ fn merge(parts: Vec<Part>, library: MaterialLibrary, path: &Path) -> Result<Mesh
         mesh.positions.extend(part.positions);
         mesh.triangles.extend(part.triangles.iter().map(|t| t.map(|v| v + offset)));
         if let (Some(all), Some(these)) = (&mut corners.normals, part.normals) {
+            all.extend(these);
+        }
+        if let (Some(all), Some(these)) = (&mut corners.tangents, part.tangents) {
             all.extend(these);
         }
         if let (Some(all), Some(these)) = (&mut corners.uvs, part.uvs) {

@@ -86,6 +86,16 @@ pub fn write_gltf(mut out: impl Write, mesh: &Mesh, binary: bool, folder: Option
         accessors.push(json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC3" }));
         attributes.insert("NORMAL".into(), json!(accessors.len() - 1));
     }
+    if let Some(tangents) = &corners.tangents {
+        let values = (0..count).map(|i| {
+            let t = tangents[wedges.source[i]];
+            let [x, y, z] = unit([t[0], t[1], t[2]]);
+            [x, y, z, if t[3] < 0.0 { -1.0 } else { 1.0 }]
+        });
+        let view = buffer.view(&floats(values), Some(ARRAY_BUFFER));
+        accessors.push(json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC4" }));
+        attributes.insert("TANGENT".into(), json!(accessors.len() - 1));
+    }
     if let Some(uvs) = corners.uvs_with_origin(true) {
         let view = buffer.view(&floats((0..count).map(|i| uvs[wedges.source[i]])), Some(ARRAY_BUFFER));
         accessors.push(json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC2" }));

@@ -10,8 +10,8 @@ use std::collections::HashMap;
 use super::bits::{BitReader, BitWriter, OutOfBits, Rice, width_for};
 use super::grid::{Grid, MAX_BITS, Quantization, from_octahedral, octahedral};
 use super::{
-    ATTRIBUTE_COLOR, ATTRIBUTE_MATERIAL, ATTRIBUTE_NORMAL, ATTRIBUTE_SKIN, ATTRIBUTE_UV, ATTRIBUTE_UV_ORIGIN_TOP,
-    Reader, put_varint,
+    ATTRIBUTE_COLOR, ATTRIBUTE_MATERIAL, ATTRIBUTE_NORMAL, ATTRIBUTE_SKIN, ATTRIBUTE_TANGENT, ATTRIBUTE_UV,
+    ATTRIBUTE_UV_ORIGIN_TOP, Reader, put_varint,
 };
 use crate::error::MeshError;
 use crate::mesh::{CornerAttributes, Mesh, NO_MATERIAL};
@@ -266,6 +266,7 @@ struct Layout {
     color: bool,
     material: bool,
     skin: bool,
+    tangent: bool,
 }
 
 impl Layout {
@@ -276,11 +277,12 @@ impl Layout {
             color: mask & ATTRIBUTE_COLOR != 0,
             material: mask & ATTRIBUTE_MATERIAL != 0,
             skin: mask & ATTRIBUTE_SKIN != 0,
+            tangent: mask & ATTRIBUTE_TANGENT != 0,
         }
     }
 
     /// The code each integer of a value uses: 0 normal, 1 uv, 2 colour, 3 material, 4 joint,
-    /// 5 weight.
+    /// 5 weight, 6 tangent direction, 7 tangent handedness.
     fn kinds(&self) -> Vec<usize> {
         let mut k = Vec::new();
         k.extend(std::iter::repeat_n(0, 2 * self.normal as usize));
@@ -289,6 +291,8 @@ impl Layout {
         k.extend(std::iter::repeat_n(3, self.material as usize));
         k.extend(std::iter::repeat_n(4, 4 * self.skin as usize));
         k.extend(std::iter::repeat_n(5, 4 * self.skin as usize));
+        k.extend(std::iter::repeat_n(6, 2 * self.tangent as usize));
+        k.extend(std::iter::repeat_n(7, self.tangent as usize));
         k
     }
 }
@@ -298,7 +302,7 @@ impl Layout {
 struct AttributeState {
     table: Vec<Vec<i64>>,
     corners: Vec<[u32; 3]>,
-    codes: [Rice; 6],
+    codes: [Rice; 8],
     kinds: Vec<usize>,
     list: Vec<u32>,
     /// Writer only: the table index of each value.
@@ -405,7 +409,7 @@ pub(super) fn encode_attributes(
 ) {
     out.push(mask);
     let layout = Layout::of(mask);
-    if layout.normal {
+    if layout.normal || layout.tangent {
         out.push(quantization.normal_bits);
     }
     // The writer fits a grid for every attribute present.
@@ -438,6 +442,11 @@ pub(super) fn encode_attributes(
             let weights = weight_bytes(w[id]);
             q.extend((0..4).map(|k| if weights[k] == 0 { 0 } else { i64::from(j[id][k]) }));
             q.extend(weights);
+        }
+        if let Some(t) = &v.tangents {
+            let t = t[id];
+            q.extend(octahedral([t[0], t[1], t[2]], quantization.normal_bits));
+            q.push(i64::from(t[3] < 0.0));
         }
         q
     };
@@ -528,7 +537,7 @@ pub(super) fn decode_attributes(
     let mask = r.take(1)?[0];
     super::check_mask(r, mask)?;
     let layout = Layout::of(mask);
-    let normal_bits = if layout.normal {
+    let normal_bits = if layout.normal || layout.tangent {
         let bits = r.take(1)?[0];
         if bits == 0 || bits > MAX_BITS {
             return Err(r.error(format!("normal grid of {bits} bits (1 to {MAX_BITS})")));
@@ -604,6 +613,7 @@ pub(super) fn decode_attributes(
         materials: layout.material.then(Vec::new),
         joints: layout.skin.then(Vec::new),
         weights: layout.skin.then(Vec::new),
+        tangents: layout.tangent.then(Vec::new),
         library: None,
     };
     for (t, q) in state.table.iter().enumerate() {
@@ -633,6 +643,14 @@ pub(super) fn decode_attributes(
             let weights = on_grid(&mut &rest[4..8], 4, 8).ok_or_else(|| bad("weight"))?;
             j.push([joints[0], joints[1], joints[2], joints[3]]);
             w.push(std::array::from_fn(|k| weights[k] as f32 / 255.0));
+            rest = &rest[8..];
+        }
+        if let Some(tangents) = &mut values.tangents {
+            let direction =
+                from_octahedral(on_grid(&mut rest, 2, normal_bits).ok_or_else(|| bad("tangent"))?, normal_bits);
+            let handedness = on_grid(&mut rest, 1, 1).ok_or_else(|| bad("tangent handedness"))?[0];
+            let [x, y, z] = direction;
+            tangents.push([x, y, z, if handedness == 1 { -1.0 } else { 1.0 }]);
         }
     }
     Ok((PmAttributes { values, base: base_corners, splits }, normal_bits, uvs, colors))

@@ -31,6 +31,8 @@ const ATTRIBUTE_UV_ORIGIN_TOP: u8 = 8;
 const ATTRIBUTE_MATERIAL: u8 = 16;
 /// Joints and weights (glTF JOINTS_0 and WEIGHTS_0), always together.
 const ATTRIBUTE_SKIN: u8 = 32;
+/// Tangents (glTF TANGENT).
+const ATTRIBUTE_TANGENT: u8 = 64;
 /// Header flag: the materials, textures and images the material numbers refer to follow the
 /// attribute section, as JSON (versions 2 and 3).
 const HAS_MATERIALS: u16 = 2;
@@ -195,11 +197,13 @@ fn attribute_mask(v: &CornerAttributes) -> u8 {
         | bit(v.uv_origin_top, ATTRIBUTE_UV_ORIGIN_TOP)
         | bit(v.materials.is_some(), ATTRIBUTE_MATERIAL)
         | bit(v.joints.is_some(), ATTRIBUTE_SKIN)
+        | bit(v.tangents.is_some(), ATTRIBUTE_TANGENT)
 }
 
 /// Refuses a mask with unknown bits or without any attribute.
 fn check_mask(r: &Reader, mask: u8) -> Result<(), MeshError> {
-    let values = ATTRIBUTE_NORMAL | ATTRIBUTE_UV | ATTRIBUTE_COLOR | ATTRIBUTE_MATERIAL | ATTRIBUTE_SKIN;
+    let values =
+        ATTRIBUTE_NORMAL | ATTRIBUTE_UV | ATTRIBUTE_COLOR | ATTRIBUTE_MATERIAL | ATTRIBUTE_SKIN | ATTRIBUTE_TANGENT;
     if mask & !(values | ATTRIBUTE_UV_ORIGIN_TOP) != 0 || mask & values == 0 {
         return Err(r.error(format!("invalid attribute mask {mask:#04x}")));
     }
@@ -223,6 +227,7 @@ fn encode_attributes(out: &mut Vec<u8>, pm: &ProgressiveMesh, a: &PmAttributes) 
         f.extend(v.materials.iter().map(|m| m[k]));
         f.extend(v.joints.iter().flat_map(|j| j[k].map(u32::from)));
         f.extend(v.weights.iter().flat_map(|w| w[k].map(f32::to_bits)));
+        f.extend(v.tangents.iter().flat_map(|t| t[k].map(f32::to_bits)));
         f
     };
     // Every index in the order it is written, renumbered to distinct values in order of first use.
@@ -275,7 +280,8 @@ fn decode_attributes(r: &mut Reader, base_faces: usize, added: &[usize]) -> Resu
         + 2 * (mask & ATTRIBUTE_UV != 0) as usize
         + 4 * (mask & ATTRIBUTE_COLOR != 0) as usize
         + (mask & ATTRIBUTE_MATERIAL != 0) as usize
-        + 8 * (mask & ATTRIBUTE_SKIN != 0) as usize;
+        + 8 * (mask & ATTRIBUTE_SKIN != 0) as usize
+        + 4 * (mask & ATTRIBUTE_TANGENT != 0) as usize;
     let count = r.varint()?;
     // Each value takes 4 bytes per float: a count the remaining bytes cannot hold is refused
     // before anything is allocated from it.
@@ -290,6 +296,7 @@ fn decode_attributes(r: &mut Reader, base_faces: usize, added: &[usize]) -> Resu
         materials: (mask & ATTRIBUTE_MATERIAL != 0).then(Vec::new),
         joints: (mask & ATTRIBUTE_SKIN != 0).then(Vec::new),
         weights: (mask & ATTRIBUTE_SKIN != 0).then(Vec::new),
+        tangents: (mask & ATTRIBUTE_TANGENT != 0).then(Vec::new),
         library: None,
     };
     for _ in 0..count {
@@ -314,6 +321,9 @@ fn decode_attributes(r: &mut Reader, base_faces: usize, added: &[usize]) -> Resu
         }
         if let Some(w) = &mut values.weights {
             w.push([r.f32()?, r.f32()?, r.f32()?, r.f32()?]);
+        }
+        if let Some(t) = &mut values.tangents {
+            t.push([r.f32()?, r.f32()?, r.f32()?, r.f32()?]);
         }
     }
     let index = |r: &mut Reader| -> Result<u32, MeshError> {

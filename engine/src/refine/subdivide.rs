@@ -286,6 +286,19 @@ fn interpolate_corners(
             .as_ref()
             .map(|v| corners().map(|e| if e.0 == e.1 { v[e.0] } else { unit(mean(v, e)) }).collect()),
         colors: parent.colors.as_ref().map(|v| corners().map(|e| mean(v, e)).collect()),
+        // A tangent's direction averaged and made unit again; its handedness the first corner's.
+        tangents: parent.tangents.as_ref().map(|v| {
+            corners()
+                .map(|e| {
+                    if e.0 == e.1 {
+                        return v[e.0];
+                    }
+                    let [x, y, z, _] = mean(v, e);
+                    let [x, y, z] = unit([x, y, z]);
+                    [x, y, z, v[e.0][3]]
+                })
+                .collect()
+        }),
         joints: parent.joints.as_ref().map(|j| {
             let w = parent.weights.as_ref().expect("joints come with weights");
             corners().map(|e| blend_skin(j, w, e).0).collect()

@@ -85,6 +85,17 @@ pub fn assert_compact_round_trip(name: &str, pm: &meshlod_engine::pm::Progressiv
                 }
             }
         }
+        if let (Some(t), Some(u)) = (&x.tangents, &y.tangents) {
+            for (s, r) in t.iter().zip(u) {
+                let length = (s[..3].iter().map(|c| (*c as f64).powi(2)).sum::<f64>()).sqrt();
+                assert_eq!(s[3] < 0.0, r[3] < 0.0, "{name}: tangent handedness {s:?} → {r:?}");
+                if length < 1e-6 {
+                    continue;
+                }
+                let dot = (0..3).map(|k| s[k] as f64 * r[k] as f64).sum::<f64>() / length;
+                assert!(dot.min(1.0).acos().to_degrees() <= 0.1, "{name}: tangent {s:?} → {r:?}");
+            }
+        }
         if let (Some(n), Some(m)) = (&x.normals, &y.normals) {
             for (s, t) in n.iter().zip(m) {
                 let length = (s.iter().map(|c| (*c as f64).powi(2)).sum::<f64>()).sqrt();
