@@ -272,6 +272,79 @@ impl CornerAttributes {
         }
     }
 
+    /// A number per corner of `triangles` (over `vertex_count` vertices): two corners of the same
+    /// vertex have the same number exactly when [`CornerAttributes::same`] holds for them (the
+    /// number is the first such corner). Comparing two numbers is what a simplifier asks millions
+    /// of times.
+    pub fn value_ids(&self, triangles: &[[u32; 3]], vertex_count: usize) -> Vec<u32> {
+        let corner_count = 3 * triangles.len();
+        // Every corner's values as a row of words, one attribute after another.
+        fn put<const N: usize>(bits: &mut [u32], stride: usize, at: &mut usize, values: &Option<Vec<[f32; N]>>) {
+            let Some(values) = values else { return };
+            for (row, v) in bits.chunks_exact_mut(stride).zip(values) {
+                for (slot, c) in row[*at..*at + N].iter_mut().zip(v) {
+                    *slot = c.to_bits();
+                }
+            }
+            *at += N;
+        }
+        let width = |present: bool, n: usize| if present { n } else { 0 };
+        let stride = width(self.uvs.is_some(), 2)
+            + width(self.normals.is_some(), 3)
+            + width(self.tangents.is_some(), 4)
+            + width(self.colors.is_some(), 4)
+            + width(self.joints.is_some(), 4)
+            + width(self.weights.is_some(), 4)
+            + width(self.materials.is_some(), 1);
+        if stride == 0 || corner_count == 0 {
+            return vec![0; corner_count];
+        }
+        let mut bits = vec![0u32; stride * corner_count];
+        let mut at = 0;
+        put(&mut bits, stride, &mut at, &self.uvs);
+        put(&mut bits, stride, &mut at, &self.normals);
+        put(&mut bits, stride, &mut at, &self.tangents);
+        put(&mut bits, stride, &mut at, &self.colors);
+        put(&mut bits, stride, &mut at, &self.weights);
+        if let Some(joints) = &self.joints {
+            for (row, j) in bits.chunks_exact_mut(stride).zip(joints) {
+                for (slot, &x) in row[at..at + 4].iter_mut().zip(j) {
+                    *slot = u32::from(x);
+                }
+            }
+            at += 4;
+        }
+        if let Some(materials) = &self.materials {
+            for (row, &m) in bits.chunks_exact_mut(stride).zip(materials) {
+                row[at] = m;
+            }
+        }
+        // Per vertex, the corners with distinct rows met so far (a chain through `next`): a
+        // corner takes the number of the first one with its row, else starts a new one.
+        let mut first = vec![u32::MAX; vertex_count];
+        let mut next = vec![u32::MAX; corner_count];
+        let mut ids = vec![0u32; corner_count];
+        for (k, &v) in triangles.iter().flatten().enumerate() {
+            let row = &bits[k * stride..(k + 1) * stride];
+            let mut r = first[v as usize];
+            let mut last = u32::MAX;
+            while r != u32::MAX && bits[r as usize * stride..(r as usize + 1) * stride] != *row {
+                last = r;
+                r = next[r as usize];
+            }
+            if r == u32::MAX {
+                r = k as u32;
+                if last == u32::MAX {
+                    first[v as usize] = r;
+                } else {
+                    next[last as usize] = r;
+                }
+            }
+            ids[k] = r;
+        }
+        ids
+    }
+
     /// Whether corners `a` and `b` carry the same attributes, bit for bit.
     pub fn same(&self, a: usize, b: usize) -> bool {
         fn same<const N: usize>(values: &Option<Vec<[f32; N]>>, a: usize, b: usize) -> bool {

@@ -52,7 +52,7 @@ impl State<'_> {
                 // The value the corner carries after the collapse.
                 let carried = if v == a {
                     sv
-                } else if self.attributes.same(sv as usize, sides[0].0 as usize) {
+                } else if self.same_values(sv, sides[0].0) {
                     sides[0].1
                 } else {
                     sides[1].1

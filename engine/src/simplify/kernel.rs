@@ -60,6 +60,10 @@ pub(crate) struct State<'o> {
     /// input's values, and for each current corner (3 per face) the input corner whose values it
     /// has. Empty when the input has none (the collapse then pays nothing for them).
     pub(super) attributes: CornerAttributes,
+    /// Per input corner, a number shared exactly by the corners of its vertex with the same
+    /// values ([`CornerAttributes::value_ids`]): every comparison of values is between corners of
+    /// one vertex (a corner's values are always its vertex's own).
+    pub(super) value_id: Vec<u32>,
     pub(super) corner_source: Vec<u32>,
     /// Per vertex, with attributes: whether it has two sets of values (on a seam). Rule 7 lets
     /// such a vertex go only into another on the seam, so with one end on a seam, the ranking
@@ -166,6 +170,7 @@ impl<'o> State<'o> {
             cos_max_normal_change: options.max_normal_change_degrees.to_radians().cos(),
             guard: None,
             attributes: CornerAttributes::default(),
+            value_id: Vec::new(),
             corner_source: Vec::new(),
             on_seam: Vec::new(),
             attribute_weights: [0.0; 3],
@@ -253,6 +258,7 @@ impl<'o> State<'o> {
             return;
         }
         self.attributes = mesh.corners.clone();
+        self.value_id = mesh.corners.value_ids(&mesh.triangles, mesh.vertex_count());
         self.corner_source = (0..3 * mesh.face_count() as u32).collect();
         if !self.track_triangles {
             self.triangles = mesh.triangles.clone();
@@ -261,7 +267,7 @@ impl<'o> State<'o> {
         let mut seen = vec![[NONE; 2]; mesh.vertex_count()];
         for (k, &v) in mesh.triangles.iter().flatten().enumerate() {
             let sets = &mut seen[v as usize];
-            let known = |s: u32| s != NONE && mesh.corners.same(s as usize, k);
+            let known = |s: u32| s != NONE && self.value_id[s as usize] == self.value_id[k];
             if known(sets[0]) || known(sets[1]) {
                 continue;
             }
@@ -312,8 +318,8 @@ impl<'o> State<'o> {
                 let g = d.face as usize;
                 let corner_of =
                     |face: usize, v: u32| 3 * face + mesh.triangles[face].iter().position(|&x| x == v).unwrap();
-                let same = mesh.corners.same(3 * f + k, corner_of(g, a))
-                    && mesh.corners.same(3 * f + (k + 1) % 3, corner_of(g, b));
+                let same = self.value_id[3 * f + k] == self.value_id[corner_of(g, a)]
+                    && self.value_id[3 * f + (k + 1) % 3] == self.value_id[corner_of(g, b)];
                 if same {
                     continue;
                 }
@@ -332,6 +338,12 @@ impl<'o> State<'o> {
         }
     }
 
+    /// Whether input corners `x` and `y`, of the same vertex, carry the same values.
+    #[inline]
+    pub(super) fn same_values(&self, x: u32, y: u32) -> bool {
+        self.value_id[x as usize] == self.value_id[y as usize]
+    }
+
     /// The input corner whose values vertex `v` has in face `f`.
     pub(super) fn source_at(&self, f: u32, v: u32) -> u32 {
         let k = self.triangles[f as usize].iter().position(|&x| x == v).expect("v is a corner of f");
@@ -345,7 +357,7 @@ impl<'o> State<'o> {
     /// (b on a seam) the edge must have two faces that differ at b, each side maps to a's values
     /// in its face, and those must differ too (a on the same seam). More than two: refused.
     pub(super) fn seam_sides(&self, a: u32, b: u32, dead: &[u32]) -> Option<[(u32, u32); 2]> {
-        let same = |x: u32, y: u32| self.attributes.same(x as usize, y as usize);
+        let same = |x: u32, y: u32| self.same_values(x, y);
         let b_first = self.source_at(dead[0], b);
         let a_first = self.source_at(dead[0], a);
         let mut b_other = NONE;
@@ -393,7 +405,7 @@ impl<'o> State<'o> {
             let k = self.triangles[f].iter().position(|&x| x == b).expect("b is a corner of its faces");
             let mut sources = [0, 1, 2].map(|i| self.corner_source[3 * f + i]);
             let before = area(sources);
-            let first = self.attributes.same(sources[k] as usize, b_first as usize);
+            let first = self.same_values(sources[k], b_first);
             sources[k] = if first { a_first } else { a_second };
             let after = area(sources);
             // A face without texture-space area has no orientation to keep.
@@ -554,7 +566,8 @@ impl<'o> State<'o> {
                         *slot = a;
                         if let Some([(b_first, a_first), (_, a_second)]) = sides {
                             let at = 3 * f as usize + k;
-                            let first = self.attributes.same(self.corner_source[at] as usize, b_first as usize);
+                            let first =
+                                self.value_id[self.corner_source[at] as usize] == self.value_id[b_first as usize];
                             if self.options.record_progressive {
                                 self.journal.push((f, self.corner_source[at]));
                             }
