@@ -44,6 +44,9 @@ pub struct CornerAttributes {
     /// Texture coordinates per corner, with v pointing up from the image's bottom-left corner (as
     /// OBJ, PLY and OpenGL have them) unless `uv_origin_top` says otherwise.
     pub uvs: Option<Vec<[f32; 2]>>,
+    /// A second set of texture coordinates per corner (glTF TEXCOORD_1: a light map, an
+    /// occlusion map), with the same origin as `uvs`.
+    pub uvs1: Option<Vec<[f32; 2]>>,
     /// True when `uvs` have v pointing down from the image's top-left corner, as glTF has them (so
     /// that a glTF read and written again keeps its values bit for bit); writers of the other
     /// convention write 1 − v.
@@ -215,6 +218,9 @@ impl CornerAttributes {
         if self.uvs.is_some() {
             names.push("uv");
         }
+        if self.uvs1.is_some() {
+            names.push("uv1");
+        }
         if self.tangents.is_some() {
             names.push("tangent");
         }
@@ -236,6 +242,7 @@ impl CornerAttributes {
     /// Whether there is no attribute.
     pub fn is_empty(&self) -> bool {
         self.uvs.is_none()
+            && self.uvs1.is_none()
             && self.normals.is_none()
             && self.tangents.is_none()
             && self.colors.is_none()
@@ -248,6 +255,7 @@ impl CornerAttributes {
     /// materials).
     fn has_values(&self) -> bool {
         self.uvs.is_some()
+            || self.uvs1.is_some()
             || self.normals.is_some()
             || self.tangents.is_some()
             || self.colors.is_some()
@@ -261,6 +269,7 @@ impl CornerAttributes {
         }
         CornerAttributes {
             uvs: pick(&self.uvs, kept.clone()),
+            uvs1: pick(&self.uvs1, kept.clone()),
             normals: pick(&self.normals, kept.clone()),
             tangents: pick(&self.tangents, kept.clone()),
             colors: pick(&self.colors, kept.clone()),
@@ -290,6 +299,7 @@ impl CornerAttributes {
         }
         let width = |present: bool, n: usize| if present { n } else { 0 };
         let stride = width(self.uvs.is_some(), 2)
+            + width(self.uvs1.is_some(), 2)
             + width(self.normals.is_some(), 3)
             + width(self.tangents.is_some(), 4)
             + width(self.colors.is_some(), 4)
@@ -302,6 +312,7 @@ impl CornerAttributes {
         let mut bits = vec![0u32; stride * corner_count];
         let mut at = 0;
         put(&mut bits, stride, &mut at, &self.uvs);
+        put(&mut bits, stride, &mut at, &self.uvs1);
         put(&mut bits, stride, &mut at, &self.normals);
         put(&mut bits, stride, &mut at, &self.tangents);
         put(&mut bits, stride, &mut at, &self.colors);
@@ -351,6 +362,7 @@ impl CornerAttributes {
             values.as_ref().is_none_or(|v| v[a].map(f32::to_bits) == v[b].map(f32::to_bits))
         }
         same(&self.uvs, a, b)
+            && same(&self.uvs1, a, b)
             && same(&self.normals, a, b)
             && same(&self.tangents, a, b)
             && same(&self.colors, a, b)
@@ -387,6 +399,7 @@ impl CornerAttributes {
             let mut bits = Vec::with_capacity(9);
             bits.extend(self.normals.iter().flat_map(|n| n[k].map(f32::to_bits)));
             bits.extend(self.uvs.iter().flat_map(|u| u[k].map(f32::to_bits)));
+            bits.extend(self.uvs1.iter().flat_map(|u| u[k].map(f32::to_bits)));
             bits.extend(self.tangents.iter().flat_map(|t| t[k].map(f32::to_bits)));
             bits.extend(self.colors.iter().flat_map(|c| c[k].map(f32::to_bits)));
             bits.extend(self.joints.iter().flat_map(|j| j[k].map(u32::from)));
@@ -418,6 +431,16 @@ impl CornerAttributes {
         })
     }
 
+    /// [`CornerAttributes::uvs_with_origin`] for the second set.
+    pub fn uvs1_with_origin(&self, top: bool) -> Option<std::borrow::Cow<'_, [[f32; 2]]>> {
+        let uvs = self.uvs1.as_deref()?;
+        Some(if top == self.uv_origin_top {
+            std::borrow::Cow::Borrowed(uvs)
+        } else {
+            std::borrow::Cow::Owned(uvs.iter().map(|&[u, v]| [u, 1.0 - v]).collect())
+        })
+    }
+
     /// Checks one entry per corner and finite values; errors name the attribute and the corner.
     fn check(&self, corner_count: usize) -> Result<(), MeshError> {
         fn check<const N: usize>(
@@ -441,6 +464,7 @@ impl CornerAttributes {
             Ok(())
         }
         check(&self.uvs, "uv", corner_count)?;
+        check(&self.uvs1, "uv1", corner_count)?;
         check(&self.normals, "normal", corner_count)?;
         check(&self.tangents, "tangent", corner_count)?;
         check(&self.colors, "color", corner_count)?;

@@ -166,6 +166,10 @@ fn gltf_round_trips_values_materials_and_images() {
     use serde_json::json;
     let mut cube = textured_cube();
     cube.corners.colors = Some((0..36).map(|k| [(k / 6) as f32 / 8.0, 0.5, 1.0, 1.0]).collect());
+    // A light map's coordinates and a tangent frame per face (mirrored on every other face).
+    let uvs = cube.corners.uvs.clone().unwrap();
+    cube.corners.uvs1 = Some((0..36).map(|k| [0.5 * uvs[k][0] + (k / 6) as f32 / 8.0, 0.5 * uvs[k][1]]).collect());
+    cube.corners.tangents = Some((0..36).map(|k| [0.0, 1.0, 0.0, if (k / 6) % 2 == 0 { 1.0 } else { -1.0 }]).collect());
     cube.corners.materials = Some((0..12u32).flat_map(|f| [f / 6; 3]).collect());
     let png = b"\x89PNG\r\n\x1a\n and the rest".to_vec();
     let library = MaterialLibrary {
@@ -190,7 +194,9 @@ fn gltf_round_trips_values_materials_and_images() {
         let back = read_mesh_bytes(&bytes, None, Path::new("cube.glb"), &ReadLimits::default()).unwrap();
         assert_eq!((back.vertex_count(), back.face_count()), (8, 12), "seam vertices joined back");
         assert_eq!(corner_positions(&back), corner_positions(&cube));
-        assert_eq!(back.corners.names(), ["normal", "uv", "color", "material"]);
+        assert_eq!(back.corners.names(), ["normal", "uv", "uv1", "tangent", "color", "material"]);
+        assert_eq!(back.corners.uvs1.as_deref(), cube.corners.uvs1_with_origin(true).as_deref());
+        assert_eq!(back.corners.tangents, cube.corners.tangents);
         // glTF's v points down: the values written are 1 − v, and read back as they were written.
         assert!(back.corners.uv_origin_top);
         assert_eq!(back.corners.uvs.as_deref(), cube.corners.uvs_with_origin(true).as_deref());
@@ -344,6 +350,7 @@ fn corner_key(mesh: &Mesh, k: usize) -> Vec<u32> {
     key.extend(c.uvs.iter().flat_map(|u| u[k].map(f32::to_bits)));
     key.extend(c.normals.iter().flat_map(|n| n[k].map(f32::to_bits)));
     key.extend(c.tangents.iter().flat_map(|t| t[k].map(f32::to_bits)));
+    key.extend(c.uvs1.iter().flat_map(|u| u[k].map(f32::to_bits)));
     key.extend(c.colors.iter().flat_map(|x| x[k].map(f32::to_bits)));
     key.extend(c.joints.iter().flat_map(|x| x[k].map(u32::from)));
     key.extend(c.weights.iter().flat_map(|x| x[k].map(f32::to_bits)));
@@ -423,6 +430,18 @@ fn progressive_meshes_carry_attributes_exactly() {
         })
         .collect();
     sphere.corners.uvs = Some(uvs);
+    // A second set without the seam (a light map), and tangents along it.
+    let uvs1 = sphere
+        .triangles
+        .iter()
+        .flatten()
+        .map(|&v| {
+            let p = sphere.positions[v as usize];
+            [p[2], p[0]]
+        })
+        .collect();
+    sphere.corners.uvs1 = Some(uvs1);
+    sphere.corners.tangents = Some(vec![[1.0, 0.0, 0.0, -1.0]; 3 * sphere.face_count()]);
     meshes.push(("seamed sphere".into(), sphere));
     if let Some(dir) = meshlod_engine::datasets::require_shared_textured("pm_attributes") {
         for row in textured_manifest(&dir) {

@@ -4,8 +4,8 @@
 //! Every triangle primitive (TRIANGLES, and TRIANGLE_STRIP / TRIANGLE_FAN unrolled) of every mesh
 //! instance in the default scene (else the first, else every mesh once) is read, placed by its
 //! node's world transform (normals by the inverse transpose; mirrored nodes keep their faces
-//! counter-clockwise) and merged into one mesh. Kept per corner: NORMAL, TANGENT, TEXCOORD_0 and
-//! COLOR_0, each when every primitive has it, and JOINTS_0 / WEIGHTS_0 of a skinned asset. glTF splits a vertex wherever its attributes differ (seams,
+//! counter-clockwise) and merged into one mesh. Kept per corner: NORMAL, TANGENT, TEXCOORD_0,
+//! TEXCOORD_1 and COLOR_0, each when every primitive has it, and JOINTS_0 / WEIGHTS_0 of a skinned asset. glTF splits a vertex wherever its attributes differ (seams,
 //! hard edges) and exporters often between primitives too: vertices at bit-identical positions are
 //! joined ([`Mesh::weld_positions`]), so the surface is one piece with seams, not cut open.
 //! POINTS and LINES primitives are not surface and are left out.
@@ -45,6 +45,7 @@ struct Part {
     normals: Option<Vec<[f32; 3]>>,
     tangents: Option<Vec<[f32; 4]>>,
     uvs: Option<Vec<[f32; 2]>>,
+    uvs1: Option<Vec<[f32; 2]>>,
     colors: Option<Vec<[f32; 4]>>,
     joints: Option<Vec<[u16; 4]>>,
     weights: Option<Vec<[f32; 4]>>,
@@ -275,7 +276,12 @@ fn library(
             for (semantic, _) in primitive.attributes() {
                 let name = semantic.to_string();
                 let skin = matches!(name.as_str(), "JOINTS_0" | "WEIGHTS_0") && rig.is_some();
-                if !skin && !matches!(name.as_str(), "POSITION" | "NORMAL" | "TANGENT" | "TEXCOORD_0" | "COLOR_0") {
+                if !skin
+                    && !matches!(
+                        name.as_str(),
+                        "POSITION" | "NORMAL" | "TANGENT" | "TEXCOORD_0" | "TEXCOORD_1" | "COLOR_0"
+                    )
+                {
                     note(format!("{name} values"));
                 }
             }
@@ -497,12 +503,16 @@ fn read_primitive(
     let normals: Option<Vec<[f32; 3]>> = reader.read_normals().map(|r| r.collect());
     let tangents: Option<Vec<[f32; 4]>> = reader.read_tangents().map(|r| r.collect());
     let uvs: Option<Vec<[f32; 2]>> = reader.read_tex_coords(0).map(|r| r.into_f32().collect());
+    let uvs1: Option<Vec<[f32; 2]>> = reader.read_tex_coords(1).map(|r| r.into_f32().collect());
     let colors: Option<Vec<[f32; 4]>> = reader.read_colors(0).map(|r| r.into_rgba_f32().collect());
     if let Some(v) = &normals {
         same_count("NORMAL", v.len())?;
     }
     if let Some(v) = &uvs {
         same_count("TEXCOORD_0", v.len())?;
+    }
+    if let Some(v) = &uvs1 {
+        same_count("TEXCOORD_1", v.len())?;
     }
     if let Some(v) = &tangents {
         same_count("TANGENT", v.len())?;
@@ -571,11 +581,12 @@ fn read_primitive(
         triangles.iter().flatten().map(|&i| placed[i as usize]).collect()
     });
     let uvs = uvs.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
+    let uvs1 = uvs1.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let colors = colors.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let joints = joints.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let weights = weights.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let material = primitive.material().index().map_or(NO_MATERIAL, |m| m as u32);
-    Ok(Part { positions, triangles, normals, tangents, uvs, colors, joints, weights, material })
+    Ok(Part { positions, triangles, normals, tangents, uvs, uvs1, colors, joints, weights, material })
 }
 
 /// Joins the parts into one mesh; an attribute is kept when every part has it.
@@ -583,6 +594,7 @@ fn merge(parts: Vec<Part>, library: MaterialLibrary, path: &Path) -> Result<Mesh
     let keep_normals = parts.iter().all(|p| p.normals.is_some());
     let keep_tangents = parts.iter().all(|p| p.tangents.is_some());
     let keep_uvs = parts.iter().all(|p| p.uvs.is_some());
+    let keep_uvs1 = parts.iter().all(|p| p.uvs1.is_some());
     let keep_colors = parts.iter().all(|p| p.colors.is_some());
     let mut library = library;
     let keep_skin = library.rig.is_some() && parts.iter().all(|p| p.joints.is_some());
@@ -594,6 +606,7 @@ fn merge(parts: Vec<Part>, library: MaterialLibrary, path: &Path) -> Result<Mesh
         normals: keep_normals.then(Vec::new),
         tangents: keep_tangents.then(Vec::new),
         uvs: keep_uvs.then(Vec::new),
+        uvs1: keep_uvs1.then(Vec::new),
         colors: keep_colors.then(Vec::new),
         joints: keep_skin.then(Vec::new),
         weights: keep_skin.then(Vec::new),
@@ -615,6 +628,9 @@ fn merge(parts: Vec<Part>, library: MaterialLibrary, path: &Path) -> Result<Mesh
             all.extend(these);
         }
         if let (Some(all), Some(these)) = (&mut corners.uvs, part.uvs) {
+            all.extend(these);
+        }
+        if let (Some(all), Some(these)) = (&mut corners.uvs1, part.uvs1) {
             all.extend(these);
         }
         if let (Some(all), Some(these)) = (&mut corners.colors, part.colors) {

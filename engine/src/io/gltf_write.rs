@@ -101,6 +101,11 @@ pub fn write_gltf(mut out: impl Write, mesh: &Mesh, binary: bool, folder: Option
         accessors.push(json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC2" }));
         attributes.insert("TEXCOORD_0".into(), json!(accessors.len() - 1));
     }
+    if let Some(uvs) = corners.uvs1_with_origin(true) {
+        let view = buffer.view(&floats((0..count).map(|i| uvs[wedges.source[i]])), Some(ARRAY_BUFFER));
+        accessors.push(json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC2" }));
+        attributes.insert("TEXCOORD_1".into(), json!(accessors.len() - 1));
+    }
     if let Some(colors) = &corners.colors {
         let values = (0..count).map(|i| colors[wedges.source[i]].map(|c| c.clamp(0.0, 1.0)));
         let view = buffer.view(&floats(values), Some(ARRAY_BUFFER));

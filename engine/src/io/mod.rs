@@ -197,9 +197,9 @@ pub fn write_mesh_to(mut out: impl Write, mesh: &Mesh, format: MeshFormat) -> st
     }
 }
 
-/// The warning for what of `mesh`'s attributes `format` has no place for (OBJ: tangents, colours,
-/// joints and weights; PLY: tangents, materials, joints and weights), or `None` when it holds
-/// them all.
+/// The warning for what of `mesh`'s attributes `format` has no place for (OBJ: second texture
+/// coordinates, tangents, colours, joints and weights; PLY: the same but colours, and materials),
+/// or `None` when it holds them all.
 pub fn unwritten_warning(format: MeshFormat, mesh: &Mesh) -> Option<String> {
     let holds: &[&str] = match format {
         MeshFormat::Obj => &["normal", "uv", "material"],

@@ -11,7 +11,7 @@ use super::bits::{BitReader, BitWriter, OutOfBits, Rice, width_for};
 use super::grid::{Grid, MAX_BITS, Quantization, from_octahedral, octahedral};
 use super::{
     ATTRIBUTE_COLOR, ATTRIBUTE_MATERIAL, ATTRIBUTE_NORMAL, ATTRIBUTE_SKIN, ATTRIBUTE_TANGENT, ATTRIBUTE_UV,
-    ATTRIBUTE_UV_ORIGIN_TOP, Reader, put_varint,
+    ATTRIBUTE_UV_ORIGIN_TOP, ATTRIBUTE_UV1, Reader, put_varint,
 };
 use crate::error::MeshError;
 use crate::mesh::{CornerAttributes, Mesh, NO_MATERIAL};
@@ -267,6 +267,7 @@ struct Layout {
     material: bool,
     skin: bool,
     tangent: bool,
+    uv1: bool,
 }
 
 impl Layout {
@@ -278,6 +279,7 @@ impl Layout {
             material: mask & ATTRIBUTE_MATERIAL != 0,
             skin: mask & ATTRIBUTE_SKIN != 0,
             tangent: mask & ATTRIBUTE_TANGENT != 0,
+            uv1: mask & ATTRIBUTE_UV1 != 0,
         }
     }
 
@@ -293,6 +295,7 @@ impl Layout {
         k.extend(std::iter::repeat_n(5, 4 * self.skin as usize));
         k.extend(std::iter::repeat_n(6, 2 * self.tangent as usize));
         k.extend(std::iter::repeat_n(7, self.tangent as usize));
+        k.extend(std::iter::repeat_n(1, 2 * self.uv1 as usize));
         k
     }
 }
@@ -415,11 +418,19 @@ pub(super) fn encode_attributes(
     // The writer fits a grid for every attribute present.
     let uvs = quantization.uvs.filter(|_| layout.uv);
     let colors = quantization.colors.filter(|_| layout.color);
-    assert_eq!((uvs.is_some(), colors.is_some()), (layout.uv, layout.color), "a grid per attribute");
+    let uvs1 = quantization.uvs1.filter(|_| layout.uv1);
+    assert_eq!(
+        (uvs.is_some(), colors.is_some(), uvs1.is_some()),
+        (layout.uv, layout.color, layout.uv1),
+        "a grid per attribute"
+    );
     if let Some(g) = &uvs {
         g.write(out, false);
     }
     if let Some(g) = &colors {
+        g.write(out, false);
+    }
+    if let Some(g) = &uvs1 {
         g.write(out, false);
     }
     let v = &a.values;
@@ -447,6 +458,9 @@ pub(super) fn encode_attributes(
             let t = t[id];
             q.extend(octahedral([t[0], t[1], t[2]], quantization.normal_bits));
             q.push(i64::from(t[3] < 0.0));
+        }
+        if let (Some(u), Some(g)) = (&v.uvs1, &uvs1) {
+            q.extend(g.quantize(&u[id]));
         }
         q
     };
@@ -529,11 +543,12 @@ fn on_grid<'q>(rest: &mut &'q [i64], n: usize, bits: u8) -> Option<&'q [i64]> {
     head.iter().all(|c| (0..1i64 << bits).contains(c)).then_some(head)
 }
 
+/// The attributes read from a compact file, with the normals' bits and the grids they were on
+/// (texture coordinates, colours, second texture coordinates).
+pub(super) type DecodedAttributes = (PmAttributes, u8, Option<Grid<2>>, Option<Grid<4>>, Option<Grid<2>>);
+
 /// Reads what [`encode_attributes`] wrote, replaying the splits of `pm` (already read).
-pub(super) fn decode_attributes(
-    r: &mut Reader,
-    pm: &ProgressiveMesh,
-) -> Result<(PmAttributes, u8, Option<Grid<2>>, Option<Grid<4>>), MeshError> {
+pub(super) fn decode_attributes(r: &mut Reader, pm: &ProgressiveMesh) -> Result<DecodedAttributes, MeshError> {
     let mask = r.take(1)?[0];
     super::check_mask(r, mask)?;
     let layout = Layout::of(mask);
@@ -548,6 +563,7 @@ pub(super) fn decode_attributes(
     };
     let uvs = if layout.uv { Some(Grid::<2>::read(r, false, "texture coordinate")?) } else { None };
     let colors = if layout.color { Some(Grid::<4>::read(r, false, "colour")?) } else { None };
+    let uvs1 = if layout.uv1 { Some(Grid::<2>::read(r, false, "second texture coordinate")?) } else { None };
     let length = r.varint()?;
     if length > (r.bytes.len() - r.offset) as u64 {
         return Err(r.error(format!("an attribute section of {length} bytes does not fit in the file")));
@@ -614,6 +630,7 @@ pub(super) fn decode_attributes(
         joints: layout.skin.then(Vec::new),
         weights: layout.skin.then(Vec::new),
         tangents: layout.tangent.then(Vec::new),
+        uvs1: layout.uv1.then(Vec::new),
         library: None,
     };
     for (t, q) in state.table.iter().enumerate() {
@@ -652,6 +669,9 @@ pub(super) fn decode_attributes(
             let [x, y, z] = direction;
             tangents.push([x, y, z, if handedness == 1 { -1.0 } else { 1.0 }]);
         }
+        if let (Some(u), Some(g)) = (&mut values.uvs1, &uvs1) {
+            u.push(g.value(on_grid(&mut rest, 2, g.bits).ok_or_else(|| bad("second texture coordinate"))?));
+        }
     }
-    Ok((PmAttributes { values, base: base_corners, splits }, normal_bits, uvs, colors))
+    Ok((PmAttributes { values, base: base_corners, splits }, normal_bits, uvs, colors, uvs1))
 }

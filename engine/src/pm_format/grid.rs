@@ -133,6 +133,8 @@ pub struct Quantization {
     pub normal_bits: u8,
     /// The texture coordinates' grid, when there are any.
     pub uvs: Option<Grid<2>>,
+    /// The second texture coordinates' grid, when there are any.
+    pub uvs1: Option<Grid<2>>,
     /// The colours' grid, when there are any.
     pub colors: Option<Grid<4>>,
 }
@@ -148,6 +150,7 @@ impl Quantization {
             positions: Grid::fit(positions, clamp(precision.position_bits), true),
             normal_bits: clamp(precision.normal_bits),
             uvs: values.and_then(|v| v.uvs.as_ref()).map(|u| Grid::fit(u.iter(), clamp(precision.uv_bits), false)),
+            uvs1: values.and_then(|v| v.uvs1.as_ref()).map(|u| Grid::fit(u.iter(), clamp(precision.uv_bits), false)),
             colors: values
                 .and_then(|v| v.colors.as_ref())
                 .map(|c| Grid::fit(c.iter(), clamp(precision.color_bits), false)),

@@ -33,6 +33,8 @@ const ATTRIBUTE_MATERIAL: u8 = 16;
 const ATTRIBUTE_SKIN: u8 = 32;
 /// Tangents (glTF TANGENT).
 const ATTRIBUTE_TANGENT: u8 = 64;
+/// Second texture coordinates (glTF TEXCOORD_1).
+const ATTRIBUTE_UV1: u8 = 128;
 /// Header flag: the materials, textures and images the material numbers refer to follow the
 /// attribute section, as JSON (versions 2 and 3).
 const HAS_MATERIALS: u16 = 2;
@@ -198,12 +200,18 @@ fn attribute_mask(v: &CornerAttributes) -> u8 {
         | bit(v.materials.is_some(), ATTRIBUTE_MATERIAL)
         | bit(v.joints.is_some(), ATTRIBUTE_SKIN)
         | bit(v.tangents.is_some(), ATTRIBUTE_TANGENT)
+        | bit(v.uvs1.is_some(), ATTRIBUTE_UV1)
 }
 
 /// Refuses a mask with unknown bits or without any attribute.
 fn check_mask(r: &Reader, mask: u8) -> Result<(), MeshError> {
-    let values =
-        ATTRIBUTE_NORMAL | ATTRIBUTE_UV | ATTRIBUTE_COLOR | ATTRIBUTE_MATERIAL | ATTRIBUTE_SKIN | ATTRIBUTE_TANGENT;
+    let values = ATTRIBUTE_NORMAL
+        | ATTRIBUTE_UV
+        | ATTRIBUTE_COLOR
+        | ATTRIBUTE_MATERIAL
+        | ATTRIBUTE_SKIN
+        | ATTRIBUTE_TANGENT
+        | ATTRIBUTE_UV1;
     if mask & !(values | ATTRIBUTE_UV_ORIGIN_TOP) != 0 || mask & values == 0 {
         return Err(r.error(format!("invalid attribute mask {mask:#04x}")));
     }
@@ -228,6 +236,7 @@ fn encode_attributes(out: &mut Vec<u8>, pm: &ProgressiveMesh, a: &PmAttributes) 
         f.extend(v.joints.iter().flat_map(|j| j[k].map(u32::from)));
         f.extend(v.weights.iter().flat_map(|w| w[k].map(f32::to_bits)));
         f.extend(v.tangents.iter().flat_map(|t| t[k].map(f32::to_bits)));
+        f.extend(v.uvs1.iter().flat_map(|u| u[k].map(f32::to_bits)));
         f
     };
     // Every index in the order it is written, renumbered to distinct values in order of first use.
@@ -281,7 +290,8 @@ fn decode_attributes(r: &mut Reader, base_faces: usize, added: &[usize]) -> Resu
         + 4 * (mask & ATTRIBUTE_COLOR != 0) as usize
         + (mask & ATTRIBUTE_MATERIAL != 0) as usize
         + 8 * (mask & ATTRIBUTE_SKIN != 0) as usize
-        + 4 * (mask & ATTRIBUTE_TANGENT != 0) as usize;
+        + 4 * (mask & ATTRIBUTE_TANGENT != 0) as usize
+        + 2 * (mask & ATTRIBUTE_UV1 != 0) as usize;
     let count = r.varint()?;
     // Each value takes 4 bytes per float: a count the remaining bytes cannot hold is refused
     // before anything is allocated from it.
@@ -297,6 +307,7 @@ fn decode_attributes(r: &mut Reader, base_faces: usize, added: &[usize]) -> Resu
         joints: (mask & ATTRIBUTE_SKIN != 0).then(Vec::new),
         weights: (mask & ATTRIBUTE_SKIN != 0).then(Vec::new),
         tangents: (mask & ATTRIBUTE_TANGENT != 0).then(Vec::new),
+        uvs1: (mask & ATTRIBUTE_UV1 != 0).then(Vec::new),
         library: None,
     };
     for _ in 0..count {
@@ -324,6 +335,9 @@ fn decode_attributes(r: &mut Reader, base_faces: usize, added: &[usize]) -> Resu
         }
         if let Some(t) = &mut values.tangents {
             t.push([r.f32()?, r.f32()?, r.f32()?, r.f32()?]);
+        }
+        if let Some(u) = &mut values.uvs1 {
+            u.push([r.f32()?, r.f32()?]);
         }
     }
     let index = |r: &mut Reader| -> Result<u32, MeshError> {
@@ -583,10 +597,10 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<ProgressiveMesh, MeshError> {
     if version == 3 {
         let (base, splits, grid) = compact::decode_geometry(&mut r, vertex_count, face_count, split_count)?;
         let mut pm = ProgressiveMesh::from_stream(base, splits).map_err(named)?;
-        let mut quantization = Quantization { positions: grid, normal_bits: 0, uvs: None, colors: None };
+        let mut quantization = Quantization { positions: grid, normal_bits: 0, uvs: None, colors: None, uvs1: None };
         if flags & HAS_ATTRIBUTES != 0 {
-            let (mut a, normal_bits, uvs, colors) = compact::decode_attributes(&mut r, &pm)?;
-            quantization = Quantization { normal_bits, uvs, colors, ..quantization };
+            let (mut a, normal_bits, uvs, colors, uvs1) = compact::decode_attributes(&mut r, &pm)?;
+            quantization = Quantization { normal_bits, uvs, colors, uvs1, ..quantization };
             if flags & HAS_MATERIALS != 0 {
                 read_library(&mut r, &mut a)?;
             }

@@ -281,6 +281,7 @@ fn interpolate_corners(
     };
     crate::mesh::CornerAttributes {
         uvs: parent.uvs.as_ref().map(|v| corners().map(|e| mean(v, e)).collect()),
+        uvs1: parent.uvs1.as_ref().map(|v| corners().map(|e| mean(v, e)).collect()),
         normals: parent
             .normals
             .as_ref()

@@ -69,6 +69,11 @@ pub fn assert_compact_round_trip(name: &str, pm: &meshlod_engine::pm::Progressiv
                 assert!(close(s[0], t[0], g.step[0]) && close(s[1], t[1], g.step[1]), "{name}: uv {s:?} → {t:?}");
             }
         }
+        if let (Some(u), Some(v), Some(g)) = (&x.uvs1, &y.uvs1, &q.uvs1) {
+            for (s, t) in u.iter().zip(v) {
+                assert!(close(s[0], t[0], g.step[0]) && close(s[1], t[1], g.step[1]), "{name}: uv1 {s:?} → {t:?}");
+            }
+        }
         if let (Some(c), Some(d), Some(g)) = (&x.colors, &y.colors, &q.colors) {
             for (s, t) in c.iter().zip(d) {
                 assert!((0..4).all(|k| close(s[k], t[k], g.step[k])), "{name}: colour {s:?} → {t:?}");
