@@ -7,6 +7,7 @@ mod common;
 use std::net::SocketAddr;
 use std::time::{Duration, Instant};
 
+use common::loopback::{TestServer, channel};
 use common::{gauge, scrape};
 use meshlod_engine::pm::ProgressiveMesh;
 use meshlod_engine::simplify::{SimplifyOptions, simplify};
@@ -14,54 +15,8 @@ use meshlod_engine::{Mesh, procedural};
 use meshlod_service::convert::{MeshLimits, mesh_from_proto, mesh_to_proto, progressive_from_proto};
 use meshlod_service::proto;
 use meshlod_service::proto::mesh_lod_client::MeshLodClient;
-use meshlod_service::server::{ServerConfig, serve_with_listener};
-use tokio::sync::oneshot;
+use meshlod_service::server::ServerConfig;
 use tonic::Code;
-use tonic::transport::Channel;
-
-struct TestServer {
-    addr: SocketAddr,
-    metrics: Option<SocketAddr>,
-    stop: Option<oneshot::Sender<()>>,
-    handle: tokio::task::JoinHandle<()>,
-}
-
-impl TestServer {
-    async fn start(config: ServerConfig) -> TestServer {
-        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-        let addr = listener.local_addr().unwrap();
-        let (tx, rx) = oneshot::channel::<()>();
-        let metrics = config.metrics_listen;
-        let handle = tokio::spawn(async move {
-            serve_with_listener(listener, config, async {
-                let _ = rx.await;
-            })
-            .await
-            .unwrap();
-        });
-        TestServer { addr, metrics, stop: Some(tx), handle }
-    }
-
-    async fn client(&self) -> MeshLodClient<Channel> {
-        let channel = channel(self.addr).await;
-        MeshLodClient::new(channel).max_decoding_message_size(usize::MAX).max_encoding_message_size(usize::MAX)
-    }
-
-    async fn stop(mut self) {
-        let _ = self.stop.take().unwrap().send(());
-        tokio::time::timeout(Duration::from_secs(30), self.handle).await.expect("graceful shutdown").unwrap();
-    }
-}
-
-async fn channel(addr: SocketAddr) -> Channel {
-    for _ in 0..50 {
-        if let Ok(c) = Channel::from_shared(format!("http://{addr}")).unwrap().connect().await {
-            return c;
-        }
-        tokio::time::sleep(Duration::from_millis(20)).await;
-    }
-    panic!("server at {addr} did not come up");
-}
 
 fn input(mesh: &Mesh) -> Option<proto::MeshInput> {
     Some(proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(mesh_to_proto(mesh))) })
@@ -299,6 +254,7 @@ async fn streamed_progressive_mesh_reassembles_exactly() {
                 batches += 1;
             }
             proto::simplify_stream_message::Item::Stats(s) => stats = Some(s),
+            proto::simplify_stream_message::Item::BaseCorners(_) => panic!("values sent for a mesh without any"),
         }
     }
     assert!(batches > 1, "small message size must split the stream");

@@ -239,6 +239,24 @@ impl CornerAttributes {
         names
     }
 
+    /// Number of values each present array holds (the length of the first one; 0 without any).
+    pub fn value_count(&self) -> usize {
+        [
+            self.uvs.as_ref().map(Vec::len),
+            self.uvs1.as_ref().map(Vec::len),
+            self.normals.as_ref().map(Vec::len),
+            self.tangents.as_ref().map(Vec::len),
+            self.colors.as_ref().map(Vec::len),
+            self.joints.as_ref().map(Vec::len),
+            self.weights.as_ref().map(Vec::len),
+            self.materials.as_ref().map(Vec::len),
+        ]
+        .into_iter()
+        .flatten()
+        .next()
+        .unwrap_or(0)
+    }
+
     /// Whether there is no attribute.
     pub fn is_empty(&self) -> bool {
         self.uvs.is_none()

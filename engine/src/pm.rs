@@ -52,13 +52,7 @@ pub struct SplitAttributes {
 impl PmAttributes {
     /// Number of values.
     pub fn value_count(&self) -> usize {
-        let v = &self.values;
-        v.normals
-            .as_ref()
-            .map(Vec::len)
-            .or(v.uvs.as_ref().map(Vec::len))
-            .or(v.colors.as_ref().map(Vec::len))
-            .unwrap_or(0)
+        self.values.value_count()
     }
 }
 

@@ -245,6 +245,7 @@ pub fn split_to_proto(s: &VertexSplit) -> proto::VertexSplit {
         position: s.new_position.to_vec(),
         vs_position: if s.moves_vs() { s.split_position.to_vec() } else { Vec::new() },
         error: s.error,
+        corners: None,
     }
 }
 

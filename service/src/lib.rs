@@ -20,6 +20,7 @@ pub mod metrics;
 pub mod predict;
 pub mod report;
 pub mod server;
+pub mod stream_values;
 
 /// Code generated from `proto/meshlod/v1/meshlod.proto`.
 #[allow(missing_docs, clippy::all, clippy::pedantic)]

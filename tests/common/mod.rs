@@ -9,6 +9,8 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
+pub mod loopback;
+
 pub fn meshlod(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_meshlod")).args(args).output().expect("meshlod runs")
 }

@@ -19,6 +19,7 @@ use crate::jobs;
 use crate::metrics::Metrics;
 use crate::proto;
 use crate::proto::mesh_lod_server::MeshLod;
+use crate::stream_values::stream_values;
 
 /// The MeshLod service.
 #[derive(Clone)]
@@ -110,11 +111,6 @@ impl MeshLodService {
             let mut options = request.options.unwrap_or_default();
             options.return_progressive |= progressive;
             let mut run = jobs::simplify(&mesh, &options, predictor.as_deref(), Some(cancel))?;
-            // The streamed splits have positions only (the unary ProgressiveMesh carries a `.pm`
-            // file with the attributes).
-            if progressive {
-                run.stats.warnings.extend(jobs::lost_attributes(&mesh, &[], "SimplifyStream"));
-            }
             run.encoded = convert::encode_mesh(&run.result.mesh, format)?;
             Ok(run)
         }
@@ -162,8 +158,9 @@ impl MeshLod for MeshLodService {
         let run = self.run("SimplifyStream", deadline, self.simplification(request.into_inner(), true)).await?;
         let pm = run.result.progressive.expect("progressive forced on");
         let stats = run.stats;
-        // Splits are ~20–40 bytes encoded; batch so each message stays under the configured size.
-        let per_batch = (self.config.stream_message_bytes / 48).max(1);
+        // Batches of whole splits, each message under the configured size (a split is ~20–40 bytes
+        // encoded, more with the values it brings).
+        let limit = self.config.stream_message_bytes.saturating_sub(64).max(1);
         let (tx, rx) = mpsc::channel(4);
         tokio::spawn(async move {
             use proto::simplify_stream_message::Item;
@@ -171,14 +168,34 @@ impl MeshLod for MeshLodService {
             if tx.send(Ok(send(Item::Base(convert::pm_base_to_proto(&pm))))).await.is_err() {
                 return;
             }
-            for (i, chunk) in pm.splits().chunks(per_batch).enumerate() {
-                let batch = proto::VertexSplitBatch {
-                    first: (i * per_batch) as u32,
-                    splits: chunk.iter().map(split_to_proto).collect(),
-                };
-                if tx.send(Ok(send(Item::Splits(batch)))).await.is_err() {
-                    return; // the client went away
+            // With attributes: the base's corner values next, then each split's with the split.
+            let (base_values, mut split_values) = match stream_values(&pm) {
+                Some((base, splits)) => (Some(base), splits.into_iter().map(Some).collect()),
+                None => (None, vec![None; pm.levels()]),
+            };
+            if let Some(base) = base_values
+                && tx.send(Ok(send(Item::BaseCorners(base)))).await.is_err()
+            {
+                return;
+            }
+            let mut batch = proto::VertexSplitBatch::default();
+            let mut size = 0;
+            for (j, (s, values)) in pm.splits().iter().zip(&mut split_values).enumerate() {
+                let split = proto::VertexSplit { corners: values.take(), ..split_to_proto(s) };
+                let bytes = prost::Message::encoded_len(&split) + 4;
+                if !batch.splits.is_empty() && size + bytes > limit {
+                    let full =
+                        std::mem::replace(&mut batch, proto::VertexSplitBatch { first: j as u32, splits: Vec::new() });
+                    if tx.send(Ok(send(Item::Splits(full)))).await.is_err() {
+                        return; // the client went away
+                    }
+                    size = 0;
                 }
+                size += bytes;
+                batch.splits.push(split);
+            }
+            if !batch.splits.is_empty() && tx.send(Ok(send(Item::Splits(batch)))).await.is_err() {
+                return;
             }
             let _ = tx.send(Ok(send(Item::Stats(stats)))).await;
         });
