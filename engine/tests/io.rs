@@ -342,3 +342,61 @@ fn hostile_gltf_is_refused_by_name() {
     let e = err("{\"asset\": ".into());
     assert!(e.contains("test.gltf"), "{e}");
 }
+
+#[test]
+fn quantized_gltf_is_read_as_floats() {
+    // KHR_mesh_quantization as gltfpack writes it: positions as unsigned shorts placed by the node's
+    // scale, normals as normalised bytes, texture coordinates as normalised unsigned shorts.
+    let mut bin = Vec::new();
+    for p in [[0u16, 0, 0], [1000, 0, 0], [0, 1000, 0]] {
+        p.iter().for_each(|c| bin.extend_from_slice(&c.to_le_bytes()));
+        bin.extend_from_slice(&[0, 0]); // each element padded to 4 bytes (stride 8)
+    }
+    for _ in 0..3 {
+        bin.extend_from_slice(&[0, 0, 127u8, 0]); // +z, padded to 4 bytes
+    }
+    for uv in [[0u16, 0], [65535, 0], [0, 32768]] {
+        uv.iter().for_each(|c| bin.extend_from_slice(&c.to_le_bytes()));
+    }
+    use base64::Engine as _;
+    let uri =
+        format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_mesh_quantization"],"extensionsRequired":["KHR_mesh_quantization"],
+        "scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0,"scale":[0.001,0.001,0.001]}}],
+        "buffers":[{{"byteLength":{},"uri":"{uri}"}}],
+        "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":24,"byteStride":8}},{{"buffer":0,"byteOffset":24,"byteLength":12,"byteStride":4}},
+                       {{"buffer":0,"byteOffset":36,"byteLength":12}}],
+        "accessors":[{{"bufferView":0,"componentType":5123,"count":3,"type":"VEC3","min":[0,0,0],"max":[1000,1000,0]}},
+                     {{"bufferView":1,"componentType":5120,"normalized":true,"count":3,"type":"VEC3"}},
+                     {{"bufferView":2,"componentType":5123,"normalized":true,"count":3,"type":"VEC2"}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1,"TEXCOORD_0":2}}}}]}}]}}"#,
+        bin.len()
+    );
+    let mesh =
+        read_mesh_bytes(json.as_bytes(), Some(MeshFormat::Gltf), Path::new("q.gltf"), &ReadLimits::default()).unwrap();
+    assert_eq!(mesh.face_count(), 1);
+    let close = |a: [f32; 3], b: [f32; 3]| a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-6);
+    assert!(
+        close(mesh.positions[1], [1.0, 0.0, 0.0]) && close(mesh.positions[2], [0.0, 1.0, 0.0]),
+        "{:?}",
+        mesh.positions
+    );
+    assert!(mesh.corners.normals.as_ref().unwrap().iter().all(|&n| close(n, [0.0, 0.0, 1.0])));
+    let uvs = mesh.corners.uvs.as_ref().unwrap();
+    assert_eq!((uvs[1], uvs[2][1]), ([1.0, 0.0], 32768.0 / 65535.0));
+    // Written out, it needs no extension: the values are floats.
+    let mut glb = Vec::new();
+    write_mesh_to(&mut glb, &mesh, MeshFormat::Gltf).unwrap();
+    let text = String::from_utf8_lossy(&glb);
+    assert!(!text.contains("KHR_mesh_quantization"), "the output still names the extension");
+    // A quantized attribute of the wrong shape is refused by name.
+    let bad = json.replace(
+        r#""componentType":5120,"normalized":true,"count":3,"type":"VEC3""#,
+        r#""componentType":5120,"normalized":true,"count":3,"type":"VEC2""#,
+    );
+    let e = read_mesh_bytes(bad.as_bytes(), Some(MeshFormat::Gltf), Path::new("q.gltf"), &ReadLimits::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("NORMAL"), "{e}");
+}

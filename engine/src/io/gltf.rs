@@ -27,7 +27,11 @@ use crate::error::MeshError;
 use crate::mesh::{CornerAttributes, Image, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL, Rig};
 
 /// Extensions whose data meshlod cannot decode; a file that requires one is refused by name.
-const UNSUPPORTED: [&str; 3] = ["KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_mesh_quantization"];
+const UNSUPPORTED: [&str; 2] = ["KHR_draco_mesh_compression", "EXT_meshopt_compression"];
+
+/// Quantized vertex attributes (positions, normals, tangents and texture coordinates as 8- or 16-bit
+/// integers, normalised or not): read, and written back as floats.
+const QUANTIZATION: &str = "KHR_mesh_quantization";
 
 /// Whether the bytes are a GLB container or glTF JSON.
 pub(crate) fn is_gltf(bytes: &[u8]) -> bool {
@@ -80,7 +84,17 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
     }
     // The crate's validation (every index in the document refers to something that exists). It
     // can panic on some out-of-range indices: that is reported as the invalid document it is.
-    let gltf = std::panic::catch_unwind(|| gltf::Gltf::from_slice(bytes))
+    // KHR_mesh_quantization is read here (the crate refuses a document that requires it): taken
+    // out of the document's lists before the crate validates the rest.
+    let validated = |bytes: &[u8]| -> Result<gltf::Gltf, gltf::Error> {
+        let mut gltf = gltf::Gltf::from_slice_without_validation(bytes)?;
+        let mut root = gltf.document.clone().into_json();
+        root.extensions_required.retain(|e| e != QUANTIZATION);
+        root.extensions_used.retain(|e| e != QUANTIZATION);
+        gltf.document = gltf::Document::from_json(root)?;
+        Ok(gltf)
+    };
+    let gltf = std::panic::catch_unwind(|| validated(bytes))
         .map_err(|_| err("document", "refers to an element that does not exist".into()))?
         .map_err(|e| err("document", e.to_string()))?;
     let document = &gltf.document;
@@ -474,7 +488,10 @@ fn read_primitive(
     joint_count: usize,
 ) -> Result<Part, String> {
     let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| d.as_slice()));
-    let positions: Vec<[f32; 3]> = reader.read_positions().ok_or("POSITION cannot be read")?.collect();
+    let positions: Vec<[f32; 3]> = match quantized::<3>(primitive, &gltf::Semantic::Positions, buffers)? {
+        Some(values) => values,
+        None => reader.read_positions().ok_or("POSITION cannot be read")?.collect(),
+    };
     let n = positions.len();
     let indices: Vec<u32> = match reader.read_indices() {
         Some(i) => i.into_u32().collect(),
@@ -500,10 +517,22 @@ fn read_primitive(
     let same_count = |what: &str, got: usize| -> Result<(), String> {
         if got == n { Ok(()) } else { Err(format!("{what} has {got} values for {n} positions")) }
     };
-    let normals: Option<Vec<[f32; 3]>> = reader.read_normals().map(|r| r.collect());
-    let tangents: Option<Vec<[f32; 4]>> = reader.read_tangents().map(|r| r.collect());
-    let uvs: Option<Vec<[f32; 2]>> = reader.read_tex_coords(0).map(|r| r.into_f32().collect());
-    let uvs1: Option<Vec<[f32; 2]>> = reader.read_tex_coords(1).map(|r| r.into_f32().collect());
+    let normals: Option<Vec<[f32; 3]>> = match quantized::<3>(primitive, &gltf::Semantic::Normals, buffers)? {
+        Some(values) => Some(values),
+        None => reader.read_normals().map(|r| r.collect()),
+    };
+    let tangents: Option<Vec<[f32; 4]>> = match quantized::<4>(primitive, &gltf::Semantic::Tangents, buffers)? {
+        Some(values) => Some(values),
+        None => reader.read_tangents().map(|r| r.collect()),
+    };
+    let uvs: Option<Vec<[f32; 2]>> = match quantized::<2>(primitive, &gltf::Semantic::TexCoords(0), buffers)? {
+        Some(values) => Some(values),
+        None => reader.read_tex_coords(0).map(|r| r.into_f32().collect()),
+    };
+    let uvs1: Option<Vec<[f32; 2]>> = match quantized::<2>(primitive, &gltf::Semantic::TexCoords(1), buffers)? {
+        Some(values) => Some(values),
+        None => reader.read_tex_coords(1).map(|r| r.into_f32().collect()),
+    };
     let colors: Option<Vec<[f32; 4]>> = reader.read_colors(0).map(|r| r.into_rgba_f32().collect());
     if let Some(v) = &normals {
         same_count("NORMAL", v.len())?;
@@ -587,6 +616,68 @@ fn read_primitive(
     let weights = weights.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let material = primitive.material().index().map_or(NO_MATERIAL, |m| m as u32);
     Ok(Part { positions, triangles, normals, tangents, uvs, uvs1, colors, joints, weights, material })
+}
+
+/// A primitive's attribute `semantic` when it is stored as integers (KHR_mesh_quantization, and
+/// texture coordinates in core glTF), converted to floats: normalised values to [0, 1] or [−1, 1]
+/// as glTF defines them, others as they are. `None` when the primitive stores it as floats (or
+/// not at all): the crate's reader reads those.
+fn quantized<const N: usize>(
+    primitive: &gltf::Primitive,
+    semantic: &gltf::Semantic,
+    buffers: &[Vec<u8>],
+) -> Result<Option<Vec<[f32; N]>>, String> {
+    use gltf::accessor::DataType;
+    let Some(accessor) = primitive.get(semantic) else { return Ok(None) };
+    let kind = accessor.data_type();
+    if kind == DataType::F32 {
+        return Ok(None);
+    }
+    let name = semantic.to_string();
+    if accessor.dimensions().multiplicity() != N {
+        return Err(format!("{name} has {} components, not {N}", accessor.dimensions().multiplicity()));
+    }
+    if accessor.sparse().is_some() {
+        return Err(format!("{name} is a sparse quantized accessor, which meshlod does not read"));
+    }
+    let width = kind.size();
+    let normalized = accessor.normalized();
+    // One component: its integer, scaled as glTF's normalised types are.
+    let value = |b: &[u8]| -> f32 {
+        match kind {
+            DataType::I8 => {
+                let x = b[0] as i8 as f32;
+                if normalized { (x / 127.0).max(-1.0) } else { x }
+            }
+            DataType::U8 => {
+                let x = b[0] as f32;
+                if normalized { x / 255.0 } else { x }
+            }
+            DataType::I16 => {
+                let x = i16::from_le_bytes([b[0], b[1]]) as f32;
+                if normalized { (x / 32767.0).max(-1.0) } else { x }
+            }
+            DataType::U16 => {
+                let x = u16::from_le_bytes([b[0], b[1]]) as f32;
+                if normalized { x / 65535.0 } else { x }
+            }
+            DataType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
+            DataType::F32 => unreachable!("floats are read by the crate"),
+        }
+    };
+    let count = accessor.count();
+    let Some(view) = accessor.view() else { return Ok(Some(vec![[0.0; N]; count])) };
+    // In range: `check_accessor` checked every element against its view.
+    let stride = view.stride().unwrap_or(accessor.size());
+    let data = &buffers[view.buffer().index()][view.offset()..view.offset() + view.length()];
+    Ok(Some(
+        (0..count)
+            .map(|i| {
+                let at = accessor.offset() + i * stride;
+                std::array::from_fn(|k| value(&data[at + k * width..]))
+            })
+            .collect(),
+    ))
 }
 
 /// Joins the parts into one mesh; an attribute is kept when every part has it.
