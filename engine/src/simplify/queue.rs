@@ -12,6 +12,13 @@ use super::options::{Metric, Placement};
 
 impl State<'_> {
     pub(super) fn push_edges_of(&mut self, v: u32, heap: &mut TieredQueue, neighbours: &mut Vec<u32>) {
+        self.push_edges_above(v, 0, heap, neighbours);
+    }
+
+    /// [`State::push_edges_of`] for the neighbours numbered `from` or above: a rebuild of the whole
+    /// queue passes `v + 1`, so that each edge is queued once (twice, its two entries would pop
+    /// one after the other and be checked twice).
+    pub(super) fn push_edges_above(&mut self, v: u32, from: u32, heap: &mut TieredQueue, neighbours: &mut Vec<u32>) {
         // Unique neighbours by mark stamps (no sort: the heap's total order makes push order moot).
         // Written unconditionally and kept by advancing the count: whether a corner's vertex was
         // seen already is as good as random (each is seen twice around an interior vertex).
@@ -24,7 +31,7 @@ impl State<'_> {
             for u in [c.next, c.prev] {
                 let mark = &mut self.mark[u as usize];
                 neighbours[count] = u;
-                count += (*mark != stamp) as usize;
+                count += ((*mark != stamp) & (u >= from)) as usize;
                 *mark = stamp;
             }
         }

@@ -92,7 +92,7 @@ pub(super) fn run(
             for v in 0..vertex_count as u32 {
                 if state.vertex_alive[v as usize] {
                     neighbours.clear();
-                    state.push_edges_of(v, &mut heap, &mut neighbours);
+                    state.push_edges_above(v, v + 1, &mut heap, &mut neighbours);
                 }
             }
             continue;
