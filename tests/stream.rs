@@ -116,3 +116,48 @@ async fn streamed_splits_carry_their_corner_values() {
     assert!(e.message().contains("splits[0].corners"), "{}", e.message());
     server.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_streamed_glb_keeps_its_material_numbers() {
+    use meshlod_engine::io::{MeshFormat, write_mesh_to};
+    use meshlod_engine::mesh::MaterialLibrary;
+    let server = TestServer::start(ServerConfig::default()).await;
+    let mut client = server.client().await;
+    // The sphere's halves drawn with two materials, sent as a GLB.
+    let mut mesh = textured_sphere();
+    let upper: Vec<bool> =
+        (0..3 * mesh.face_count()).map(|k| mesh.corners.colors.as_ref().unwrap()[k][0] > 0.5).collect();
+    mesh.corners.materials = Some(upper.iter().map(|&u| u as u32).collect());
+    let materials = vec![serde_json::json!({ "name": "lower" }), serde_json::json!({ "name": "upper" })];
+    mesh.corners.library = Some(std::sync::Arc::new(MaterialLibrary { materials, ..Default::default() }));
+    let mut glb = Vec::new();
+    write_mesh_to(&mut glb, &mesh, MeshFormat::Gltf).unwrap();
+    let mut request = request(&mesh);
+    request.input = Some(proto::MeshInput {
+        source: Some(proto::mesh_input::Source::File(proto::EncodedMesh {
+            data: glb,
+            format: proto::MeshFormat::Gltf as i32,
+        })),
+    });
+    let mut stream = client.simplify_stream(request).await.unwrap().into_inner();
+    let (mut base, mut base_corners, mut splits) = (None, None, Vec::new());
+    while let Some(message) = stream.message().await.unwrap() {
+        use proto::simplify_stream_message::Item;
+        match message.item.unwrap() {
+            Item::Base(b) => base = Some(b),
+            Item::BaseCorners(c) => base_corners = Some(c),
+            Item::Splits(batch) => splits.extend(batch.splits),
+            Item::Stats(_) => {}
+        }
+    }
+    let pm = progressive_from_stream(&base.unwrap(), base_corners.as_ref(), &splits).unwrap();
+    for level in [0, pm.levels()] {
+        let m = pm.at_level(level);
+        m.check().unwrap_or_else(|e| panic!("level {level}: {e}"));
+        assert!(m.corners.names().contains(&"material"), "level {level}");
+    }
+    let full = pm.at_level(pm.levels());
+    let count = |m: &Mesh, which: u32| m.corners.materials.as_ref().unwrap().iter().filter(|&&x| x == which).count();
+    assert_eq!((count(&full, 0), count(&full, 1)), (count(&mesh, 0), count(&mesh, 1)));
+    server.stop().await;
+}

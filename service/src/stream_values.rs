@@ -12,6 +12,9 @@ use tonic::Status;
 use crate::convert::progressive_from_proto;
 use crate::proto;
 
+/// Most material numbers a stream may name.
+const MAX_MATERIALS: usize = 1 << 16;
+
 /// Rebuilds a streamed progressive mesh (a client reassembling SimplifyStream): the base, its
 /// corners' values when the input had attributes, and the splits with theirs; every split and value
 /// checked.
@@ -35,6 +38,8 @@ pub fn progressive_from_stream(
 /// attributes.
 pub fn stream_values(pm: &ProgressiveMesh) -> Option<(proto::CornerValues, Vec<proto::CornerValues>)> {
     let a = pm.attributes()?;
+    // Texture coordinates with v up, as the contract has them: flipped once, not per message.
+    let flipped = (a.values.uvs_with_origin(false), a.values.uvs1_with_origin(false));
     let mut number: HashMap<u32, u32> = HashMap::new();
     // The message's corners renumbered in order of first use, the values first used here added.
     let mut message = |corners: &[u32], moved: &[(u32, u32)]| -> proto::CornerValues {
@@ -48,7 +53,7 @@ pub fn stream_values(pm: &ProgressiveMesh) -> Option<(proto::CornerValues, Vec<p
         };
         let corners = corners.iter().map(|&k| id(k)).collect();
         let moved = moved.iter().flat_map(|&(face, k)| [face, id(k)]).collect();
-        proto::CornerValues { added: Some(values_to_proto(&a.values, &added)), corners, moved }
+        proto::CornerValues { added: Some(values_to_proto(&a.values, &flipped, &added)), corners, moved }
     };
     let base: Vec<u32> = a.base.iter().flatten().copied().collect();
     let base = message(&base, &[]);
@@ -64,9 +69,12 @@ pub fn stream_values(pm: &ProgressiveMesh) -> Option<(proto::CornerValues, Vec<p
     Some((base, splits))
 }
 
-/// The values `picked` (indices into `values`), as the contract has them (texture coordinates with v
-/// up).
-fn values_to_proto(values: &CornerAttributes, picked: &[usize]) -> proto::AttributeValues {
+/// Texture coordinates and second texture coordinates with v up.
+type Flipped<'a> = (Option<std::borrow::Cow<'a, [[f32; 2]]>>, Option<std::borrow::Cow<'a, [[f32; 2]]>>);
+
+/// The values `picked` (indices into `values`), as the contract has them (texture coordinates from
+/// `flipped`, with v up).
+fn values_to_proto(values: &CornerAttributes, flipped: &Flipped<'_>, picked: &[usize]) -> proto::AttributeValues {
     fn flat<T: Copy, const N: usize>(values: &Option<Vec<[T; N]>>, picked: &[usize]) -> Vec<T> {
         values.as_ref().map_or_else(Vec::new, |v| picked.iter().flat_map(|&k| v[k]).collect())
     }
@@ -75,11 +83,11 @@ fn values_to_proto(values: &CornerAttributes, picked: &[usize]) -> proto::Attrib
     };
     proto::AttributeValues {
         normals: flat(&values.normals, picked),
-        uvs: flip(&values.uvs_with_origin(false)),
+        uvs: flip(&flipped.0),
         colors: flat(&values.colors, picked),
         materials: values.materials.as_ref().map_or_else(Vec::new, |m| picked.iter().map(|&k| m[k]).collect()),
         tangents: flat(&values.tangents, picked),
-        uvs1: flip(&values.uvs1_with_origin(false)),
+        uvs1: flip(&flipped.1),
         joints: values
             .joints
             .as_ref()
@@ -161,6 +169,22 @@ pub fn values_from_stream(
     }
     // The contract's texture coordinates have v up.
     values.uv_origin_top = false;
+    // Material numbers are the input's (the stream does not carry the materials themselves): as
+    // many default materials stand for them, so that every level is a valid mesh.
+    if let Some(materials) = &values.materials {
+        let count = materials.iter().filter(|&&m| m != NO_MATERIAL).map(|&m| m as usize + 1).max().unwrap_or(0);
+        if count > MAX_MATERIALS {
+            return Err(invalid(
+                "base_corners.added.materials",
+                format!("material {} (at most {MAX_MATERIALS})", count - 1),
+            ));
+        }
+        let library = meshlod_engine::mesh::MaterialLibrary {
+            materials: vec![serde_json::json!({}); count],
+            ..Default::default()
+        };
+        values.library = Some(std::sync::Arc::new(library));
+    }
     Ok(PmAttributes { values, base: base_corners, splits: out })
 }
 
