@@ -118,7 +118,7 @@ async fn streamed_splits_carry_their_corner_values() {
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn a_streamed_glb_keeps_its_material_numbers() {
+async fn a_streamed_glb_keeps_its_material_and_joint_numbers() {
     use meshlod_engine::io::{MeshFormat, write_mesh_to};
     use meshlod_engine::mesh::MaterialLibrary;
     let server = TestServer::start(ServerConfig::default()).await;
@@ -132,13 +132,65 @@ async fn a_streamed_glb_keeps_its_material_numbers() {
     mesh.corners.library = Some(std::sync::Arc::new(MaterialLibrary { materials, ..Default::default() }));
     let mut glb = Vec::new();
     write_mesh_to(&mut glb, &mesh, MeshFormat::Gltf).unwrap();
-    let mut request = request(&mesh);
-    request.input = Some(proto::MeshInput {
+    let mut glb_request = request(&mesh);
+    glb_request.input = Some(proto::MeshInput {
         source: Some(proto::mesh_input::Source::File(proto::EncodedMesh {
             data: glb,
             format: proto::MeshFormat::Gltf as i32,
         })),
     });
+    let pm = stream_of(&mut client, glb_request).await;
+    for level in [0, pm.levels()] {
+        let m = pm.at_level(level);
+        m.check().unwrap_or_else(|e| panic!("level {level}: {e}"));
+        assert!(m.corners.names().contains(&"material"), "level {level}");
+    }
+    let full = pm.at_level(pm.levels());
+    let count = |m: &Mesh, which: u32| m.corners.materials.as_ref().unwrap().iter().filter(|&&x| x == which).count();
+    assert_eq!((count(&full, 0), count(&full, 1)), (count(&mesh, 0), count(&mesh, 1)));
+
+    // A skinned GLB (the fuzz corpus' strip): its joints and weights come through the stream.
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../engine/tests/fuzz-corpus/skinned.glb");
+    let skinned = meshlod_engine::io::read_mesh(&path).unwrap();
+    let mut skinned_request = request(&skinned);
+    skinned_request.input = Some(proto::MeshInput {
+        source: Some(proto::mesh_input::Source::File(proto::EncodedMesh {
+            data: std::fs::read(&path).unwrap(),
+            format: proto::MeshFormat::Gltf as i32,
+        })),
+    });
+    let pm = stream_of(&mut client, skinned_request).await;
+    let full = pm.at_level(pm.levels());
+    full.check().unwrap();
+    let mut skins: Vec<_> = full
+        .corners
+        .joints
+        .clone()
+        .unwrap()
+        .into_iter()
+        .zip(full.corners.weights.clone().unwrap())
+        .map(|(j, w)| (j, w.map(f32::to_bits)))
+        .collect();
+    let mut want: Vec<_> = skinned
+        .corners
+        .joints
+        .clone()
+        .unwrap()
+        .into_iter()
+        .zip(skinned.corners.weights.clone().unwrap())
+        .map(|(j, w)| (j, w.map(f32::to_bits)))
+        .collect();
+    skins.sort();
+    want.sort();
+    assert_eq!(skins, want);
+    server.stop().await;
+}
+
+/// Runs SimplifyStream and reassembles what it sends.
+async fn stream_of(
+    client: &mut proto::mesh_lod_client::MeshLodClient<tonic::transport::Channel>,
+    request: proto::SimplifyRequest,
+) -> meshlod_engine::pm::ProgressiveMesh {
     let mut stream = client.simplify_stream(request).await.unwrap().into_inner();
     let (mut base, mut base_corners, mut splits) = (None, None, Vec::new());
     while let Some(message) = stream.message().await.unwrap() {
@@ -150,14 +202,5 @@ async fn a_streamed_glb_keeps_its_material_numbers() {
             Item::Stats(_) => {}
         }
     }
-    let pm = progressive_from_stream(&base.unwrap(), base_corners.as_ref(), &splits).unwrap();
-    for level in [0, pm.levels()] {
-        let m = pm.at_level(level);
-        m.check().unwrap_or_else(|e| panic!("level {level}: {e}"));
-        assert!(m.corners.names().contains(&"material"), "level {level}");
-    }
-    let full = pm.at_level(pm.levels());
-    let count = |m: &Mesh, which: u32| m.corners.materials.as_ref().unwrap().iter().filter(|&&x| x == which).count();
-    assert_eq!((count(&full, 0), count(&full, 1)), (count(&mesh, 0), count(&mesh, 1)));
-    server.stop().await;
+    progressive_from_stream(&base.unwrap(), base_corners.as_ref(), &splits).unwrap()
 }

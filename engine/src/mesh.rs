@@ -459,6 +459,42 @@ impl CornerAttributes {
         })
     }
 
+    /// Checks the joints and weights: both or neither, one per value, and every joint one of the
+    /// rig's skin (a `.pm` file's value table is checked with it too).
+    pub(crate) fn check_skin(&self, count: usize) -> Result<(), MeshError> {
+        match &self.joints {
+            Some(joints) if joints.len() != count => {
+                return Err(MeshError::InvalidParameter {
+                    name: "joints",
+                    reason: format!("{} per-corner values for {count} corners", joints.len()),
+                });
+            }
+            Some(_) if self.weights.is_none() => {
+                return Err(MeshError::InvalidParameter { name: "weights", reason: "joints without weights".into() });
+            }
+            None if self.weights.is_some() => {
+                return Err(MeshError::InvalidParameter { name: "joints", reason: "weights without joints".into() });
+            }
+            _ => {}
+        }
+        if let Some(joints) = &self.joints {
+            let rig = self.library.as_ref().and_then(|l| l.rig.as_ref());
+            let known = rig.map_or(0, Rig::joint_count);
+            if let Some(corner) = joints.iter().position(|j| j.iter().any(|&x| x as usize >= known)) {
+                let reason = match rig {
+                    None => "joints without a skin to refer to".to_string(),
+                    Some(_) => format!(
+                        "corner {corner} (face {}) names joint {}; the skin has {known}",
+                        corner / 3,
+                        joints[corner].iter().max().copied().unwrap_or(0)
+                    ),
+                };
+                return Err(MeshError::InvalidParameter { name: "joints", reason });
+            }
+        }
+        Ok(())
+    }
+
     /// Checks one entry per corner and finite values; errors name the attribute and the corner.
     fn check(&self, corner_count: usize) -> Result<(), MeshError> {
         fn check<const N: usize>(
@@ -487,36 +523,7 @@ impl CornerAttributes {
         check(&self.tangents, "tangent", corner_count)?;
         check(&self.colors, "color", corner_count)?;
         check(&self.weights, "weights", corner_count)?;
-        match &self.joints {
-            Some(joints) if joints.len() != corner_count => {
-                return Err(MeshError::InvalidParameter {
-                    name: "joints",
-                    reason: format!("{} per-corner values for {corner_count} corners", joints.len()),
-                });
-            }
-            Some(_) if self.weights.is_none() => {
-                return Err(MeshError::InvalidParameter { name: "weights", reason: "joints without weights".into() });
-            }
-            None if self.weights.is_some() => {
-                return Err(MeshError::InvalidParameter { name: "joints", reason: "weights without joints".into() });
-            }
-            _ => {}
-        }
-        if let Some(joints) = &self.joints {
-            let rig = self.library.as_ref().and_then(|l| l.rig.as_ref());
-            let known = rig.map_or(0, Rig::joint_count);
-            if let Some(corner) = joints.iter().position(|j| j.iter().any(|&x| x as usize >= known)) {
-                let reason = match rig {
-                    None => "joints without a skin to refer to".to_string(),
-                    Some(_) => format!(
-                        "corner {corner} (face {}) names joint {}; the skin has {known}",
-                        corner / 3,
-                        joints[corner].iter().max().copied().unwrap_or(0)
-                    ),
-                };
-                return Err(MeshError::InvalidParameter { name: "joints", reason });
-            }
-        }
+        self.check_skin(corner_count)?;
         if let Some(materials) = &self.materials {
             let reason = if materials.len() != corner_count {
                 Some(format!("{} per-corner values for {corner_count} corners", materials.len()))

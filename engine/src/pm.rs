@@ -393,6 +393,7 @@ impl ProgressiveMesh {
             |location: String, reason: String| MeshError::Parse { path: "<progressive mesh>".into(), location, reason };
         let count = attributes.value_count() as u32;
         let out_of_range = |ids: &[u32]| ids.iter().find(|&&k| k >= count).copied();
+        attributes.values.check_skin(count as usize).map_err(|e| bad("attributes".into(), e.to_string()))?;
         if attributes.base.len() != self.base.face_count() || attributes.splits.len() != self.splits.len() {
             return Err(bad("attributes".into(), "do not match the base faces and the splits".into()));
         }

@@ -5,7 +5,7 @@
 
 use std::collections::HashMap;
 
-use meshlod_engine::mesh::{CornerAttributes, NO_MATERIAL};
+use meshlod_engine::mesh::{CornerAttributes, MaterialLibrary, NO_MATERIAL, Rig};
 use meshlod_engine::pm::{PmAttributes, ProgressiveMesh, SplitAttributes};
 use tonic::Status;
 
@@ -169,18 +169,29 @@ pub fn values_from_stream(
     }
     // The contract's texture coordinates have v up.
     values.uv_origin_top = false;
-    // Material numbers are the input's (the stream does not carry the materials themselves): as
-    // many default materials stand for them, so that every level is a valid mesh.
-    if let Some(materials) = &values.materials {
-        let count = materials.iter().filter(|&&m| m != NO_MATERIAL).map(|&m| m as usize + 1).max().unwrap_or(0);
-        if count > MAX_MATERIALS {
-            return Err(invalid(
-                "base_corners.added.materials",
-                format!("material {} (at most {MAX_MATERIALS})", count - 1),
-            ));
-        }
-        let library = meshlod_engine::mesh::MaterialLibrary {
-            materials: vec![serde_json::json!({}); count],
+    // Material and joint numbers are the input's (the stream does not carry the materials or the
+    // skeleton themselves): as many default materials, and a skin of as many bare joints, stand for
+    // them, so that every level is a valid mesh.
+    let materials = values.materials.iter().flatten().filter(|&&m| m != NO_MATERIAL).map(|&m| m as usize + 1).max();
+    let joints = values.joints.iter().flatten().flatten().map(|&j| j as usize + 1).max();
+    if materials.unwrap_or(0) > MAX_MATERIALS {
+        return Err(invalid("base_corners.added.materials", format!("more than {MAX_MATERIALS} materials")));
+    }
+    if values.materials.is_some() || values.joints.is_some() {
+        let rig = values.joints.is_some().then(|| {
+            let count = joints.unwrap_or(1);
+            let mut nodes = vec![serde_json::json!({}); count];
+            nodes.push(serde_json::json!({ "skin": 0 }));
+            Rig {
+                nodes,
+                mesh_node: count,
+                skins: vec![serde_json::json!({ "joints": (0..count).collect::<Vec<_>>() })],
+                ..Default::default()
+            }
+        });
+        let library = MaterialLibrary {
+            materials: vec![serde_json::json!({}); materials.unwrap_or(0)],
+            rig,
             ..Default::default()
         };
         values.library = Some(std::sync::Arc::new(library));
