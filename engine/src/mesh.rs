@@ -427,7 +427,7 @@ impl CornerAttributes {
         };
         let mut seen: std::collections::HashMap<(u32, Vec<u32>), u32> = std::collections::HashMap::new();
         let mut source = Vec::new();
-        let corner_vertex = (0..3 * triangles.len())
+        let corner_vertex: Vec<u32> = (0..3 * triangles.len())
             .map(|k| {
                 *seen.entry((triangles[k / 3][k % 3], key(k))).or_insert_with(|| {
                     source.push(k);
@@ -435,6 +435,18 @@ impl CornerAttributes {
                 })
             })
             .collect();
+        // In the mesh's vertex order (a vertex's copies in the order its corners first use them), so
+        // that a reader joining the copies again (`Mesh::weld_positions`) numbers the vertices as
+        // they were: a mesh written and read back simplifies as it did before.
+        let vertex_of = |k: usize| triangles[k / 3][k % 3];
+        let mut order: Vec<u32> = (0..source.len() as u32).collect();
+        order.sort_by_key(|&i| (vertex_of(source[i as usize]), i));
+        let mut rank = vec![0u32; order.len()];
+        for (r, &i) in order.iter().enumerate() {
+            rank[i as usize] = r as u32;
+        }
+        let source = order.iter().map(|&i| source[i as usize]).collect();
+        let corner_vertex = corner_vertex.iter().map(|&i| rank[i as usize]).collect();
         Wedges { source, corner_vertex, identity: false }
     }
 
