@@ -259,14 +259,7 @@ impl CornerAttributes {
 
     /// Whether there is no attribute.
     pub fn is_empty(&self) -> bool {
-        self.uvs.is_none()
-            && self.uvs1.is_none()
-            && self.normals.is_none()
-            && self.tangents.is_none()
-            && self.colors.is_none()
-            && self.joints.is_none()
-            && self.weights.is_none()
-            && self.materials.is_none()
+        !self.has_values() && self.materials.is_none()
     }
 
     /// Whether there is a value besides the material (what splits a vertex in a format without
@@ -304,6 +297,12 @@ impl CornerAttributes {
     /// number is the first such corner). Comparing two numbers is what a simplifier asks millions
     /// of times.
     pub fn value_ids(&self, triangles: &[[u32; 3]], vertex_count: usize) -> Vec<u32> {
+        self.row_ids(triangles, vertex_count, true)
+    }
+
+    /// [`CornerAttributes::value_ids`], the materials left out unless `with_materials`.
+    fn row_ids(&self, triangles: &[[u32; 3]], vertex_count: usize, with_materials: bool) -> Vec<u32> {
+        let materials = self.materials.as_ref().filter(|_| with_materials);
         let corner_count = 3 * triangles.len();
         // Every corner's values as a row of words, one attribute after another.
         fn put<const N: usize>(bits: &mut [u32], stride: usize, at: &mut usize, values: &Option<Vec<[f32; N]>>) {
@@ -323,10 +322,7 @@ impl CornerAttributes {
             + width(self.colors.is_some(), 4)
             + width(self.joints.is_some(), 4)
             + width(self.weights.is_some(), 4)
-            + width(self.materials.is_some(), 1);
-        if stride == 0 || corner_count == 0 {
-            return vec![0; corner_count];
-        }
+            + width(materials.is_some(), 1);
         let mut bits = vec![0u32; stride * corner_count];
         let mut at = 0;
         put(&mut bits, stride, &mut at, &self.uvs);
@@ -343,7 +339,7 @@ impl CornerAttributes {
             }
             at += 4;
         }
-        if let Some(materials) = &self.materials {
+        if let Some(materials) = materials {
             for (row, &m) in bits.chunks_exact_mut(stride).zip(materials) {
                 row[at] = m;
             }
@@ -413,62 +409,39 @@ impl CornerAttributes {
                 identity: true,
             };
         }
-        let key = |k: usize| {
-            let mut bits = Vec::with_capacity(9);
-            bits.extend(self.normals.iter().flat_map(|n| n[k].map(f32::to_bits)));
-            bits.extend(self.uvs.iter().flat_map(|u| u[k].map(f32::to_bits)));
-            bits.extend(self.uvs1.iter().flat_map(|u| u[k].map(f32::to_bits)));
-            bits.extend(self.tangents.iter().flat_map(|t| t[k].map(f32::to_bits)));
-            bits.extend(self.colors.iter().flat_map(|c| c[k].map(f32::to_bits)));
-            bits.extend(self.joints.iter().flat_map(|j| j[k].map(u32::from)));
-            bits.extend(self.weights.iter().flat_map(|w| w[k].map(f32::to_bits)));
-            bits.extend(materials.map(|m| m[k]));
-            bits
-        };
-        let mut seen: std::collections::HashMap<(u32, Vec<u32>), u32> = std::collections::HashMap::new();
-        let mut source = Vec::new();
-        let corner_vertex: Vec<u32> = (0..3 * triangles.len())
-            .map(|k| {
-                *seen.entry((triangles[k / 3][k % 3], key(k))).or_insert_with(|| {
-                    source.push(k);
-                    source.len() as u32 - 1
-                })
-            })
-            .collect();
-        // In the mesh's vertex order (a vertex's copies in the order its corners first use them), so
-        // that a reader joining the copies again (`Mesh::weld_positions`) numbers the vertices as
-        // they were: a mesh written and read back simplifies as it did before.
+        // One output vertex per corner that is the first of its vertex with its values, in the
+        // mesh's vertex order (a vertex's copies in the order its corners first use them), so that a
+        // reader joining the copies again (`Mesh::weld_positions`) numbers the vertices as they
+        // were: a mesh written and read back simplifies as it did before.
+        let ids = self.row_ids(triangles, vertex_count, by_material);
         let vertex_of = |k: usize| triangles[k / 3][k % 3];
-        let mut order: Vec<u32> = (0..source.len() as u32).collect();
-        order.sort_by_key(|&i| (vertex_of(source[i as usize]), i));
-        let mut rank = vec![0u32; order.len()];
-        for (r, &i) in order.iter().enumerate() {
-            rank[i as usize] = r as u32;
+        let mut source: Vec<usize> = (0..ids.len()).filter(|&k| ids[k] as usize == k).collect();
+        source.sort_by_key(|&k| (vertex_of(k), k));
+        let mut rank = vec![0u32; ids.len()];
+        for (r, &k) in source.iter().enumerate() {
+            rank[k] = r as u32;
         }
-        let source = order.iter().map(|&i| source[i as usize]).collect();
-        let corner_vertex = corner_vertex.iter().map(|&i| rank[i as usize]).collect();
+        let corner_vertex = ids.iter().map(|&id| rank[id as usize]).collect();
         Wedges { source, corner_vertex, identity: false }
     }
 
     /// The texture coordinates with v pointing down (`top` true, glTF) or up (OBJ, PLY), flipped
     /// (v → 1 − v) when stored the other way.
     pub fn uvs_with_origin(&self, top: bool) -> Option<std::borrow::Cow<'_, [[f32; 2]]>> {
-        let uvs = self.uvs.as_deref()?;
-        Some(if top == self.uv_origin_top {
-            std::borrow::Cow::Borrowed(uvs)
-        } else {
-            std::borrow::Cow::Owned(uvs.iter().map(|&[u, v]| [u, 1.0 - v]).collect())
-        })
+        self.uvs.as_deref().map(|uvs| self.with_origin(uvs, top))
     }
 
     /// [`CornerAttributes::uvs_with_origin`] for the second set.
     pub fn uvs1_with_origin(&self, top: bool) -> Option<std::borrow::Cow<'_, [[f32; 2]]>> {
-        let uvs = self.uvs1.as_deref()?;
-        Some(if top == self.uv_origin_top {
+        self.uvs1.as_deref().map(|uvs| self.with_origin(uvs, top))
+    }
+
+    fn with_origin<'a>(&self, uvs: &'a [[f32; 2]], top: bool) -> std::borrow::Cow<'a, [[f32; 2]]> {
+        if top == self.uv_origin_top {
             std::borrow::Cow::Borrowed(uvs)
         } else {
             std::borrow::Cow::Owned(uvs.iter().map(|&[u, v]| [u, 1.0 - v]).collect())
-        })
+        }
     }
 
     /// Checks the joints and weights: both or neither, one per value, and every joint one of the

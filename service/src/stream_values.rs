@@ -126,7 +126,6 @@ pub fn values_from_stream(
         let added = message.added.as_ref().unwrap_or(&empty);
         append(values, added).map_err(|reason| invalid(format!("{at}.added"), reason))
     };
-    let count = |v: &CornerAttributes| v.value_count() as u32;
     read(&mut values, base, "base_corners")?;
     let index = |k: u32, known: u32, at: &str| -> Result<u32, Status> {
         if k < known { Ok(k) } else { Err(invalid(at, format!("value {k} is not in the table ({known} values)"))) }
@@ -135,7 +134,7 @@ pub fn values_from_stream(
     if base.corners.len() != 3 * faces || !base.moved.is_empty() {
         return Err(invalid("base_corners", format!("{} corners for {faces} base faces", base.corners.len())));
     }
-    let known = count(&values);
+    let known = values.value_count() as u32;
     let base_corners = base
         .corners
         .chunks_exact(3)
@@ -151,7 +150,7 @@ pub fn values_from_stream(
     for (j, (s, message)) in pm.splits().iter().zip(splits).enumerate() {
         let at = format!("splits[{j}].corners");
         read(&mut values, message, &at)?;
-        let known = count(&values);
+        let known = values.value_count() as u32;
         let added = s.added_faces();
         if message.corners.len() != 3 * added || !message.moved.len().is_multiple_of(2) {
             return Err(invalid(&at, format!("{} corners for {added} added faces", message.corners.len())));

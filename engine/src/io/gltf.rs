@@ -517,22 +517,14 @@ fn read_primitive(
     let same_count = |what: &str, got: usize| -> Result<(), String> {
         if got == n { Ok(()) } else { Err(format!("{what} has {got} values for {n} positions")) }
     };
-    let normals: Option<Vec<[f32; 3]>> = match quantized::<3>(primitive, &gltf::Semantic::Normals, buffers)? {
-        Some(values) => Some(values),
-        None => reader.read_normals().map(|r| r.collect()),
-    };
-    let tangents: Option<Vec<[f32; 4]>> = match quantized::<4>(primitive, &gltf::Semantic::Tangents, buffers)? {
-        Some(values) => Some(values),
-        None => reader.read_tangents().map(|r| r.collect()),
-    };
-    let uvs: Option<Vec<[f32; 2]>> = match quantized::<2>(primitive, &gltf::Semantic::TexCoords(0), buffers)? {
-        Some(values) => Some(values),
-        None => reader.read_tex_coords(0).map(|r| r.into_f32().collect()),
-    };
-    let uvs1: Option<Vec<[f32; 2]>> = match quantized::<2>(primitive, &gltf::Semantic::TexCoords(1), buffers)? {
-        Some(values) => Some(values),
-        None => reader.read_tex_coords(1).map(|r| r.into_f32().collect()),
-    };
+    let normals = quantized::<3>(primitive, &gltf::Semantic::Normals, buffers)?
+        .or_else(|| reader.read_normals().map(|r| r.collect()));
+    let tangents = quantized::<4>(primitive, &gltf::Semantic::Tangents, buffers)?
+        .or_else(|| reader.read_tangents().map(|r| r.collect()));
+    let uvs = quantized::<2>(primitive, &gltf::Semantic::TexCoords(0), buffers)?
+        .or_else(|| reader.read_tex_coords(0).map(|r| r.into_f32().collect()));
+    let uvs1 = quantized::<2>(primitive, &gltf::Semantic::TexCoords(1), buffers)?
+        .or_else(|| reader.read_tex_coords(1).map(|r| r.into_f32().collect()));
     let colors: Option<Vec<[f32; 4]>> = reader.read_colors(0).map(|r| r.into_rgba_f32().collect());
     if let Some(v) = &normals {
         same_count("NORMAL", v.len())?;

@@ -230,17 +230,7 @@ impl<'o> State<'o> {
             }
         }
         for &(a, b, f) in &boundary_edges {
-            let [p0, p1, p2] = mesh.triangle_points(f as usize);
-            let face_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
-            let (pa, pb) = (mesh.point(a), mesh.point(b));
-            let edge = pb - pa;
-            let plane_normal = edge.cross(face_normal).normalize_or_zero();
-            if plane_normal == DVec3::ZERO {
-                continue;
-            }
-            let q = Quadric::constraint(plane_normal, pa, BOUNDARY_WEIGHT * edge.length_squared());
-            state.vertices[a as usize].quadric += q;
-            state.vertices[b as usize].quadric += q;
+            state.add_edge_plane(mesh, f as usize, a, b, BOUNDARY_WEIGHT);
         }
         (state, edges)
     }
@@ -305,7 +295,6 @@ impl<'o> State<'o> {
     /// eye's chart on the Duck, shrinks to a triangle for almost nothing and its texture spreads
     /// over the faces around).
     fn add_seam_planes(&mut self, mesh: &Mesh) {
-        let weight = SEAM_WEIGHT;
         for (f, t) in mesh.triangles.iter().enumerate() {
             for k in 0..3 {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
@@ -315,27 +304,31 @@ impl<'o> State<'o> {
                 // The face across (a, b), and whether its corners at a and b carry other values.
                 let across = self.fans[a as usize].iter().find(|d| d.face != f as u32 && d.touches(b));
                 let Some(d) = across else { continue };
-                let g = d.face as usize;
-                let corner_of =
-                    |face: usize, v: u32| 3 * face + mesh.triangles[face].iter().position(|&x| x == v).unwrap();
-                let same = self.value_id[3 * f + k] == self.value_id[corner_of(g, a)]
-                    && self.value_id[3 * f + (k + 1) % 3] == self.value_id[corner_of(g, b)];
+                let g = d.face;
+                let same = self.same_values(3 * f as u32 + k as u32, self.source_at(g, a))
+                    && self.same_values(3 * f as u32 + (k as u32 + 1) % 3, self.source_at(g, b));
                 if same {
                     continue;
                 }
-                let [p0, p1, p2] = mesh.triangle_points(f);
-                let face_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
-                let (pa, pb) = (mesh.point(a), mesh.point(b));
-                let edge = pb - pa;
-                let plane_normal = edge.cross(face_normal).normalize_or_zero();
-                if plane_normal == DVec3::ZERO {
-                    continue;
-                }
-                let q = Quadric::constraint(plane_normal, pa, weight * edge.length_squared());
-                self.vertices[a as usize].quadric += q;
-                self.vertices[b as usize].quadric += q;
+                self.add_edge_plane(mesh, f, a, b, SEAM_WEIGHT);
             }
         }
+    }
+
+    /// Adds to `a` and `b` the constraint plane through edge (a, b) perpendicular to face `f`,
+    /// weighted by `weight` times the edge's squared length (a border or a seam keeps its line).
+    fn add_edge_plane(&mut self, mesh: &Mesh, f: usize, a: u32, b: u32, weight: f64) {
+        let [p0, p1, p2] = mesh.triangle_points(f);
+        let face_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        let (pa, pb) = (mesh.point(a), mesh.point(b));
+        let edge = pb - pa;
+        let plane_normal = edge.cross(face_normal).normalize_or_zero();
+        if plane_normal == DVec3::ZERO {
+            return;
+        }
+        let q = Quadric::constraint(plane_normal, pa, weight * edge.length_squared());
+        self.vertices[a as usize].quadric += q;
+        self.vertices[b as usize].quadric += q;
     }
 
     /// Whether input corners `x` and `y`, of the same vertex, carry the same values.
