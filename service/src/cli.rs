@@ -263,7 +263,7 @@ pub struct SimplifyArgs {
     /// Keep every vertex of a texture, normal, colour or material seam in place.
     #[arg(long)]
     pub lock_seams: bool,
-    /// Weights of the appearance term of the cost, e.g. `uv=4,normal=2` (each ≥ 0; unset ones 0;
+    /// Weights of the attribute quadrics in the cost, e.g. `uv=0.3` (each ≥ 0; unset ones 0;
     /// off by default: docs/attributes-report.md has what it does and costs).
     #[arg(long, value_name = "uv=W,normal=W,color=W", value_parser = parse_attribute_weights)]
     pub attribute_weights: Option<proto::AttributeWeights>,

@@ -11,6 +11,7 @@ use crate::pm::CollapseRecord;
 use crate::prefetch::prefetch;
 use crate::quadric::Quadric;
 
+use super::attribute_quadric::WedgeQuadrics;
 use super::classify::{Scan, VertexKind, scan_fans};
 use super::guard::DistanceGuard;
 use super::legality::{CONE_MIN_QUALITY, Legal, NormalCone, triangle_quality};
@@ -69,11 +70,9 @@ pub(crate) struct State<'o> {
     /// such a vertex go only into another on the seam, so with one end on a seam, the ranking
     /// keeps that end in place ([`State::choose`]) rather than picking a collapse rule 7 refuses.
     pub(super) on_seam: Vec<bool>,
-    /// The appearance term's weights for texture coordinates, normals and colours, times the
-    /// squared bounding-box diagonal (so that they compare with the quadric's squared distances).
-    pub(super) attribute_weights: [f64; 3],
-    /// Whether the appearance term is on (weights set and attributes carried).
-    pub(super) appearance_on: bool,
+    /// The attribute quadrics of the wedges ([`WedgeQuadrics`]), when attributes are carried and
+    /// weighted.
+    pub(super) wedges: Option<WedgeQuadrics>,
     /// With attributes and a progressive mesh to record: per collapse, the corners of the removed
     /// vertex that took new values, as (face, the input corner whose values it had before), and
     /// where each collapse's entries end. The vertex splits restore them.
@@ -173,8 +172,7 @@ impl<'o> State<'o> {
             value_id: Vec::new(),
             corner_source: Vec::new(),
             on_seam: Vec::new(),
-            attribute_weights: [0.0; 3],
-            appearance_on: false,
+            wedges: None,
             journal: Vec::new(),
             journal_ends: Vec::new(),
         };
@@ -271,11 +269,7 @@ impl<'o> State<'o> {
         }
         let diagonal2 = mesh.bounds().map_or(0.0, |b| b.diagonal().powi(2));
         let w = self.options.attribute_weights;
-        self.attribute_weights = [w.uv * diagonal2, w.normal * diagonal2, w.color * diagonal2];
-        if !self.attribute_weights.iter().all(|w| w.is_finite()) {
-            self.attribute_weights = [0.0; 3];
-        }
-        self.appearance_on = self.attribute_weights != [0.0; 3];
+        self.wedges = WedgeQuadrics::new(mesh, &self.value_id, [w.uv, w.normal, w.color].map(|w| w * diagonal2));
         // (A survivor keeps its flag: a seam vertex goes only into one on the same seam.)
         self.on_seam = seen.iter().map(|sets| sets[1] != NONE).collect();
         self.add_seam_planes(mesh);
@@ -542,7 +536,9 @@ impl<'o> State<'o> {
             None
         } else {
             let count = if dead[1] == NONE { 1 } else { 2 };
-            Some(self.seam_sides(a, b, &dead[..count]).expect("rule 7 was checked"))
+            let sides = self.seam_sides(a, b, &dead[..count]).expect("rule 7 was checked");
+            self.merge_wedges(sides);
+            Some(sides)
         };
         let is_dead = |d: &Corner| (d.face == dead[0]) | (d.face == dead[1]);
         self.fans[a as usize].retain(|d| !is_dead(d));

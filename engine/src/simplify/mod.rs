@@ -86,7 +86,7 @@
 //!    and a neighbour that goes into it takes its values on the side it comes from
 //!    (`State::carry_attributes`, `State::seam_sides`). Without attributes the rule costs nothing.
 
-mod attribute_cost;
+mod attribute_quadric;
 mod classify;
 mod cost;
 mod guard;

@@ -146,10 +146,10 @@ pub struct SimplifyOptions {
     /// Keep every vertex on a seam (where a vertex's corners differ in texture coordinates,
     /// normals, colours or material) in place: seams keep every vertex they had.
     pub lock_seams: bool,
-    /// Weights of the appearance term of the cost (texture coordinates, normals, colours): how far
-    /// the values a collapse leaves at the merged vertex are from what the faces' own attribute
-    /// fields give there (`attribute_cost`). All 0, the default, turns it off; measured in
-    /// docs/attributes-report.md.
+    /// Weights of the attribute quadrics in the cost (texture coordinates, normals, colours): per
+    /// wedge, how far the values a collapse leaves at the merged vertex are from what the faces
+    /// it has taken in gave there (`attribute_quadric`). All 0, the default, turns them off;
+    /// measured in docs/attributes-report.md.
     pub attribute_weights: AttributeWeights,
     /// Set to `true` by another thread to stop the work; the call then returns
     /// [`MeshError::Cancelled`].

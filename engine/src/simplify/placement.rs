@@ -92,13 +92,20 @@ impl State<'_> {
                 // The normal term depends on the edge only, not on where the merged vertex goes,
                 // so every placement of this edge is ranked by its quadric error alone.
                 let factor = self.normal_factor(va, vb);
-                let appearance_on = self.appearance_on;
                 let mover = match (may_keep_a, may_keep_b) {
                     (true, false) => Keep::A,
                     (false, true) => Keep::B,
                     _ => Keep::Larger,
                 };
                 let on_boundary = ka == VertexKind::Boundary && kb == VertexKind::Boundary;
+                let appearance = |survivor: u32, p: DVec3| self.attribute_error(survivor, survivor ^ a ^ b, p);
+                // The survivor of a moving collapse ([`State::evaluate`]).
+                let mover_vertex = || match mover {
+                    Keep::A => a,
+                    Keep::B => b,
+                    Keep::Larger if self.fans[a as usize].len() >= self.fans[b as usize].len() => a,
+                    Keep::Larger => b,
+                };
                 let optimal = may_move && self.options.placement == Placement::Optimal;
                 if optimal
                     && !on_boundary
@@ -109,18 +116,10 @@ impl State<'_> {
                     // the midpoint (a nearly singular system can run far off), has the lowest
                     // error of all placements: nothing else needs evaluating.
                     let error = q.error(p);
-                    let appearance = if appearance_on {
-                        let survivor = if self.fans[a as usize].len() >= self.fans[b as usize].len() { a } else { b };
-                        self.attribute_error(survivor, survivor ^ a ^ b, p)
-                    } else {
-                        0.0
-                    };
-                    return Some(Choice { cost: (error + appearance) * factor, error, keep: mover, position: p });
+                    let cost = (error + appearance(mover_vertex(), p)) * factor;
+                    return Some(Choice { cost, error, keep: mover, position: p });
                 }
                 let (e_a, e_b) = (q.error(pa), q.error(pb));
-                let appearance = |survivor: u32, p: DVec3| {
-                    if appearance_on { self.attribute_error(survivor, survivor ^ a ^ b, p) } else { 0.0 }
-                };
                 if may_keep_a {
                     consider(Keep::A, pa, (e_a + appearance(a, pa)) * factor, e_a);
                 }
@@ -130,7 +129,7 @@ impl State<'_> {
                 if may_move && self.options.placement != Placement::Endpoint {
                     let mid = (pa + pb) * 0.5;
                     let e_mid = q.error(mid);
-                    consider(mover, mid, e_mid * factor, e_mid);
+                    consider(mover, mid, (e_mid + appearance(mover_vertex(), mid)) * factor, e_mid);
                     if optimal && on_boundary {
                         // A boundary edge's vertex stays on the edge: the best point of the segment
                         // (the error along it is a parabola through its values at 0, ½ and 1).
@@ -139,7 +138,7 @@ impl State<'_> {
                             let t = (0.25 * (3.0 * e_a - 4.0 * e_mid + e_b) / curvature).clamp(0.0, 1.0);
                             let p = pa + (pb - pa) * t;
                             let error = q.error(p);
-                            consider(mover, p, error * factor, error);
+                            consider(mover, p, (error + appearance(mover_vertex(), p)) * factor, error);
                         }
                     }
                 }

@@ -57,9 +57,10 @@ impl State<'_> {
     pub(super) fn entry_pair(&self, v: u32, us: [u32; 2]) -> [Option<QueueEntry>; 2] {
         let vv = &self.vertices[v as usize];
         let (v0, v1) = (&self.vertices[us[0] as usize], &self.vertices[us[1] as usize]);
-        // (The appearance term needs the fans: an edge with it is ranked alone.)
-        let quadric_cost =
-            self.options.metric != Metric::Melax && self.options.placement == Placement::Optimal && !self.appearance_on;
+        // (The attribute quadrics need the wedges: an edge with them is ranked alone.)
+        let quadric_cost = self.options.metric != Metric::Melax
+            && self.options.placement == Placement::Optimal
+            && self.wedges.is_none();
         let interior = quadric_cost & (vv.kind == VertexKind::Interior);
         let usual = [interior & (v0.kind == VertexKind::Interior), interior & (v1.kind == VertexKind::Interior)];
         if !(usual[0] || usual[1]) {
