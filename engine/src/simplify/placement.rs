@@ -98,7 +98,11 @@ impl State<'_> {
                     _ => Keep::Larger,
                 };
                 let on_boundary = ka == VertexKind::Boundary && kb == VertexKind::Boundary;
-                let appearance = |survivor: u32, p: DVec3| self.attribute_error(survivor, survivor ^ a ^ b, p);
+                // (Checked here: a call per ranking costs a mesh without attribute quadrics ~2%.)
+                let weighted = self.wedges.is_some();
+                let appearance = |survivor: u32, p: DVec3| {
+                    if weighted { self.attribute_error(survivor, survivor ^ a ^ b, p) } else { 0.0 }
+                };
                 // The survivor of a moving collapse ([`State::evaluate`]).
                 let mover_vertex = || match mover {
                     Keep::A => a,
