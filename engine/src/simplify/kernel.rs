@@ -348,7 +348,9 @@ impl<'o> State<'o> {
         let b_first = self.source_at(dead[0], b);
         let a_first = self.source_at(dead[0], a);
         let mut b_other = NONE;
-        for corner in &self.fans[b as usize] {
+        // (A vertex off the seams has one set of values: nothing to look for.)
+        let fan: &[Corner] = if self.on_seam[b as usize] { &self.fans[b as usize] } else { &[] };
+        for corner in fan {
             let s = self.source_at(corner.face, b);
             if same(s, b_first) {
                 continue;
