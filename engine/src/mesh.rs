@@ -303,57 +303,19 @@ impl CornerAttributes {
     /// [`CornerAttributes::value_ids`], the materials left out unless `with_materials`.
     fn row_ids(&self, triangles: &[[u32; 3]], vertex_count: usize, with_materials: bool) -> Vec<u32> {
         let materials = self.materials.as_ref().filter(|_| with_materials);
+        let same = |a: usize, b: usize| self.same_values(a, b) && materials.is_none_or(|m| m[a] == m[b]);
+        // Per vertex, the corners with distinct values met so far (a chain through `next`): a
+        // corner takes the number of the first one with its values, else starts a new one. (The
+        // values are compared where they are: a copy of them as rows of words cost more than the
+        // comparisons, about one per corner.)
         let corner_count = 3 * triangles.len();
-        // Every corner's values as a row of words, one attribute after another.
-        fn put<const N: usize>(bits: &mut [u32], stride: usize, at: &mut usize, values: &Option<Vec<[f32; N]>>) {
-            let Some(values) = values else { return };
-            for (row, v) in bits.chunks_exact_mut(stride).zip(values) {
-                for (slot, c) in row[*at..*at + N].iter_mut().zip(v) {
-                    *slot = c.to_bits();
-                }
-            }
-            *at += N;
-        }
-        let width = |present: bool, n: usize| if present { n } else { 0 };
-        let stride = width(self.uvs.is_some(), 2)
-            + width(self.uvs1.is_some(), 2)
-            + width(self.normals.is_some(), 3)
-            + width(self.tangents.is_some(), 4)
-            + width(self.colors.is_some(), 4)
-            + width(self.joints.is_some(), 4)
-            + width(self.weights.is_some(), 4)
-            + width(materials.is_some(), 1);
-        let mut bits = vec![0u32; stride * corner_count];
-        let mut at = 0;
-        put(&mut bits, stride, &mut at, &self.uvs);
-        put(&mut bits, stride, &mut at, &self.uvs1);
-        put(&mut bits, stride, &mut at, &self.normals);
-        put(&mut bits, stride, &mut at, &self.tangents);
-        put(&mut bits, stride, &mut at, &self.colors);
-        put(&mut bits, stride, &mut at, &self.weights);
-        if let Some(joints) = &self.joints {
-            for (row, j) in bits.chunks_exact_mut(stride).zip(joints) {
-                for (slot, &x) in row[at..at + 4].iter_mut().zip(j) {
-                    *slot = u32::from(x);
-                }
-            }
-            at += 4;
-        }
-        if let Some(materials) = materials {
-            for (row, &m) in bits.chunks_exact_mut(stride).zip(materials) {
-                row[at] = m;
-            }
-        }
-        // Per vertex, the corners with distinct rows met so far (a chain through `next`): a
-        // corner takes the number of the first one with its row, else starts a new one.
         let mut first = vec![u32::MAX; vertex_count];
         let mut next = vec![u32::MAX; corner_count];
         let mut ids = vec![0u32; corner_count];
         for (k, &v) in triangles.iter().flatten().enumerate() {
-            let row = &bits[k * stride..(k + 1) * stride];
             let mut r = first[v as usize];
             let mut last = u32::MAX;
-            while r != u32::MAX && bits[r as usize * stride..(r as usize + 1) * stride] != *row {
+            while r != u32::MAX && !same(r as usize, k) {
                 last = r;
                 r = next[r as usize];
             }
@@ -372,6 +334,11 @@ impl CornerAttributes {
 
     /// Whether corners `a` and `b` carry the same attributes, bit for bit.
     pub fn same(&self, a: usize, b: usize) -> bool {
+        self.same_values(a, b) && self.materials.as_ref().is_none_or(|m| m[a] == m[b])
+    }
+
+    /// [`CornerAttributes::same`], the materials left out.
+    fn same_values(&self, a: usize, b: usize) -> bool {
         fn same<const N: usize>(values: &Option<Vec<[f32; N]>>, a: usize, b: usize) -> bool {
             values.as_ref().is_none_or(|v| v[a].map(f32::to_bits) == v[b].map(f32::to_bits))
         }
@@ -382,7 +349,6 @@ impl CornerAttributes {
             && same(&self.colors, a, b)
             && same(&self.weights, a, b)
             && self.joints.as_ref().is_none_or(|j| j[a] == j[b])
-            && self.materials.as_ref().is_none_or(|m| m[a] == m[b])
     }
 
     /// Splits the mesh's vertices where their corners differ, for formats with one value per
