@@ -70,6 +70,39 @@ pub fn require_shared_textured(test: &str) -> Option<PathBuf> {
     }
 }
 
+/// Environment variable naming the shared corpus directory (binary PLY, `MANIFEST.tsv` inside).
+pub const CORPUS_ENV: &str = "MESHLOD_CORPUS";
+
+/// The shared corpus, if present: `$MESHLOD_CORPUS`, else `corpus/` beside the shared meshes, else
+/// `../shared/corpus`.
+pub fn shared_corpus_dir() -> Option<PathBuf> {
+    if let Some(dir) = std::env::var_os(CORPUS_ENV) {
+        let dir = PathBuf::from(dir);
+        return dir.is_dir().then_some(dir);
+    }
+    let beside = shared_meshes_dir().and_then(|m| m.parent().map(|p| p.join("corpus")));
+    let workspace = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    beside
+        .into_iter()
+        .chain([PathBuf::from("../shared/corpus"), workspace.join("../shared/corpus")])
+        .find(|d| d.join("MANIFEST.tsv").is_file())
+}
+
+/// [`require_shared_meshes`] for the corpus: the directory, or a loud message (a panic under CI)
+/// when it is missing.
+pub fn require_shared_corpus(test: &str) -> Option<PathBuf> {
+    match shared_corpus_dir() {
+        Some(dir) => Some(dir),
+        None if std::env::var_os("CI").is_some() => {
+            panic!("{test}: shared corpus not found (set {CORPUS_ENV}); CI must run with it")
+        }
+        None => {
+            eprintln!("\n!!! {test}: SKIPPED — shared corpus not found (set {CORPUS_ENV}) !!!\n");
+            None
+        }
+    }
+}
+
 /// Path of one shared mesh file (`name` without extension), if the directory and the file exist.
 pub fn shared_mesh(name: &str) -> Option<PathBuf> {
     shared_meshes_dir().map(|d| d.join(format!("{name}.obj"))).filter(|p| p.is_file())

@@ -73,8 +73,9 @@ fn assert_valid_output(name: &str, input: &Mesh, output: &Mesh) {
     if before.inconsistently_oriented_edges == 0 {
         assert_eq!(after.inconsistently_oriented_edges, 0, "{name}: orientation broken");
     }
-    assert_eq!(after.degenerate_faces, 0, "{name}: degenerate face created");
-    assert_eq!(after.duplicate_faces, 0, "{name}: duplicate face created");
+    // (Corpus inputs may have their own; none is added.)
+    assert!(after.degenerate_faces <= before.degenerate_faces, "{name}: degenerate face created");
+    assert!(after.duplicate_faces <= before.duplicate_faces, "{name}: duplicate face created");
     if before.non_manifold_edges == 0 && before.non_manifold_vertices == 0 {
         assert_eq!(after.boundary_loops, before.boundary_loops, "{name}: boundary loops changed");
     }
@@ -177,6 +178,32 @@ fn shared_meshes_at_99_percent_stay_valid_and_round_trip() {
         assert_valid_output(name, &mesh, &out.mesh);
         assert_exact_round_trip(name, &mesh, out.progressive.as_ref().unwrap());
     }
+}
+
+#[test]
+fn non_manifold_corpus_meshes_stay_valid_and_round_trip() {
+    // CAD and robot parts with non-manifold edges and vertices (frozen: they never move, and take
+    // in neighbours only where rule 1 allows), at 80%: every invariant and the exact round trip.
+    let Some(dir) = meshlod_engine::datasets::require_shared_corpus("non_manifold_corpus_meshes") else { return };
+    let manifest = std::fs::read_to_string(dir.join("MANIFEST.tsv")).unwrap();
+    let mut checked = 0;
+    for line in manifest.lines().skip(1) {
+        let fields: Vec<&str> = line.split('\t').collect();
+        let faces: usize = fields[4].parse().unwrap();
+        if faces > 40_000 {
+            continue; // the larger ones add time, not cases
+        }
+        let mesh = read_mesh(dir.join(fields[0])).unwrap();
+        let report = validate(&mesh);
+        if report.non_manifold_vertices == 0 {
+            continue;
+        }
+        let out = simplify(&mesh, &options(0.8)).unwrap();
+        assert_valid_output(fields[0], &mesh, &out.mesh);
+        assert_exact_round_trip(fields[0], &mesh, out.progressive.as_ref().unwrap());
+        checked += 1;
+    }
+    assert!(checked >= 10, "only {checked} non-manifold corpus meshes");
 }
 
 #[test]

@@ -17,7 +17,9 @@ pub(crate) enum VertexKind {
     #[default]
     Interior,
     Boundary,
-    /// Non-manifold or inconsistently oriented: no collapse touches it.
+    /// Non-manifold or inconsistently oriented: never moves or disappears, and takes in a neighbour
+    /// only where its edges to the collapse's opposite vertices are manifold and consistently
+    /// oriented (rule 1 of the module doc).
     Frozen,
     /// Never moves or disappears, but a neighbour may collapse into it (along the boundary, for a
     /// boundary neighbour): where three or more sets of attribute values meet, a locked seam's

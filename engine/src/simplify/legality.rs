@@ -157,6 +157,16 @@ impl State<'_> {
         if stray || common != shared_count {
             return Err(Refusal::Link);
         }
+        // Rule 1 for a frozen survivor (non-manifold or inconsistently oriented around it): its
+        // edges to the opposite vertices each have exactly one face besides the collapsing one,
+        // which crosses the edge the other way, so that the faces b brings attach to one sheet,
+        // the vertex split that undoes the collapse walks them unambiguously, and no edge is left
+        // without a face (a triangle hanging from the vertex by a corner would vanish, splitting
+        // the boundary it joined).
+        let frozen = self.vertices[a as usize].kind == VertexKind::Frozen;
+        if frozen && !opposite.iter().all(|&v| v == NONE || self.attaches_cleanly(a, b, v)) {
+            return Err(Refusal::Link);
+        }
         // Rule 3, the merged vertex keeps enough faces.
         let remaining = self.fans[a as usize].len() + self.fans[b as usize].len() - 2 * shared_count;
         let interior = self.is_interior(a) && self.is_interior(b);
@@ -223,12 +233,26 @@ impl State<'_> {
             let before = fan.get(self.spoke[y as usize] as usize);
             folded |= before.is_some_and(|&([x, _], m)| (x == y) & (m.dot(n) < FOLD_DOT));
         }
-        debug_assert_eq!(folded, folds_pairwise(&fan), "spoke pairing disagrees with the pairwise check");
+        // Around a frozen survivor the new fan need not be a disk: every pair is looked at.
+        let folded = if frozen { folds_pairwise(&fan) } else { folded };
+        debug_assert!(frozen || folded == folds_pairwise(&fan), "spoke pairing disagrees with the pairwise check");
         self.fan_scratch = fan;
         if folded {
             return Err(Refusal::Fold);
         }
         Ok(Legal { candidate: *c, check: self.check_id })
+    }
+
+    /// Whether edge (a, v) has, besides the face it shares with b, exactly one face, crossing the
+    /// edge the other way (a → v in one, v → a in the other).
+    fn attaches_cleanly(&self, a: u32, b: u32, v: u32) -> bool {
+        let (mut forward, mut back, mut others) = (0, 0, 0);
+        for corner in &self.fans[a as usize] {
+            forward += (corner.next == v) as u32;
+            back += (corner.prev == v) as u32;
+            others += (corner.touches(v) && !corner.touches(b)) as u32;
+        }
+        others == 1 && forward == 1 && back == 1
     }
 
     /// Whether `v` has a closed fan (an anchor is looked at: its kind does not say).
@@ -420,17 +444,33 @@ mod tests {
     }
 
     #[test]
-    fn a_fin_freezes_its_edge() {
-        // Rule 1: a third face on an edge (a fin) makes the edge's ends frozen: no candidate.
+    fn a_fin_freezes_its_ends_which_take_in_only_neighbours_clear_of_it() {
+        // Rule 1: a third face on an edge (a fin) makes the edge's ends frozen: they never move or
+        // go, and the edge never collapses.
         let mut mesh = wheel();
         let tip = mesh.positions.len() as u32;
         mesh.positions.push([0.5, 0.3, 1.0]);
         mesh.triangles.push([0, 1, tip]);
+        // The border turned by −20° so that no face of the inner ring lines up with the centre.
+        let (sin, cos) = (-20f32).to_radians().sin_cos();
+        for p in &mut mesh.positions[7..13] {
+            *p = [p[0] * cos - p[1] * sin, p[0] * sin + p[1] * cos, 0.0];
+        }
         let options = SimplifyOptions::default();
         let (state, _) = State::new(&mesh, &options);
         assert_eq!(state.kind(0), VertexKind::Frozen);
         assert_eq!(state.kind(1), VertexKind::Frozen);
-        assert!(state.evaluate(0, 1).is_none() && state.evaluate(0, 2).is_none() && state.evaluate(1, 7).is_none());
+        assert!(state.evaluate(0, 1).is_none(), "two frozen ends");
+        assert!(state.evaluate(1, 7).is_none(), "a border vertex goes into a frozen one only along the border");
+        let into_centre = |removed: u32| {
+            let c = state.evaluate(0, removed).expect("a frozen end may survive");
+            assert_eq!((c.survivor, c.removed, c.position), (0, removed, mesh.positions[0]));
+            check(&mesh, &options, 0, removed, mesh.positions[0])
+        };
+        // Vertex 2's collapse would hang its faces on the fin's edge (0, 1): refused.
+        assert_eq!(into_centre(2), Err(Refusal::Link));
+        // Vertex 3's faces attach along (0, 2) and (0, 4), both manifold: legal.
+        assert_eq!(into_centre(3), Ok(()));
         assert!(state.evaluate(2, 3).is_some(), "the rest of the wheel still simplifies");
     }
 }

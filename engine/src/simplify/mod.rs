@@ -60,10 +60,14 @@
 //!       \  /                 |
 //!        vr                  vr
 //! ```
-//! 1. neither endpoint is frozen (non-manifold or inconsistently oriented neighbourhood); an
-//!    anchored endpoint (where three or more sets of attribute values meet, a locked seam's or a
-//!    locked border's vertex) stays where it is and only takes in the other end, and two anchors
-//!    never collapse into each other;
+//! 1. a frozen endpoint (non-manifold or inconsistently oriented neighbourhood) and an anchored
+//!    one (where three or more sets of attribute values meet, a locked seam's or a locked border's
+//!    vertex) stays where it is and only takes in the other end, and two such endpoints never
+//!    collapse into each other; a frozen survivor also needs its edges to the collapse's opposite
+//!    vertices to have one face besides the collapsing one, crossing them the other way, so that
+//!    the faces it takes in join one sheet and the vertex split that undoes the collapse finds
+//!    them unambiguously (checked with rule 3). Frozen vertices that took nothing in had left the
+//!    rest of a non-manifold CAD mesh to make up the face count with far costlier collapses;
 //! 2. boundaries: an interior edge with both ends on the boundary is refused (it would pinch the
 //!    surface); a boundary vertex is never removed in favour of an interior one and does not move
 //!    off its boundary (into an anchor, only along the boundary); with [`BoundaryMode::Lock`]

@@ -34,21 +34,22 @@ impl State<'_> {
     pub(super) fn choose(&self, a: u32, b: u32) -> Option<Choice> {
         let (va, vb) = (&self.vertices[a as usize], &self.vertices[b as usize]);
         let (ka, kb) = (va.kind, vb.kind);
-        if ka == VertexKind::Frozen || kb == VertexKind::Frozen {
-            return None;
-        }
         let lock = self.options.boundary == BoundaryMode::Lock;
+        // A frozen vertex stays where it is, as an anchor does, and takes in a neighbour only
+        // where its own edges to the collapse's opposite vertices are manifold (rule 1, checked
+        // with the link condition in `is_legal`).
+        let stays = |k: VertexKind| matches!(k, VertexKind::Anchored | VertexKind::Frozen);
         // Which endpoints may survive, and whether the survivor may move.
         let (may_keep_a, may_keep_b, may_move) = match (ka, kb) {
-            (VertexKind::Anchored, VertexKind::Anchored) => return None,
+            _ if stays(ka) && stays(kb) => return None,
             // A boundary vertex goes into an anchor only along its boundary.
-            (VertexKind::Anchored, VertexKind::Boundary) | (VertexKind::Boundary, VertexKind::Anchored)
-                if self.edge_corners(a, b).1 != 1 =>
+            (_, VertexKind::Boundary) | (VertexKind::Boundary, _)
+                if (stays(ka) || stays(kb)) && self.edge_corners(a, b).1 != 1 =>
             {
                 return None;
             }
-            (VertexKind::Anchored, _) => (true, false, false),
-            (_, VertexKind::Anchored) => (false, true, false),
+            _ if stays(ka) => (true, false, false),
+            _ if stays(kb) => (false, true, false),
             (VertexKind::Boundary, VertexKind::Boundary) => {
                 if lock || self.edge_corners(a, b).1 != 1 {
                     return None; // interior edge joining two boundary points, or locked border
