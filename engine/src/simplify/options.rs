@@ -227,10 +227,9 @@ pub struct SimplifyStats {
     pub rejected: usize,
     /// The same refusals, by rule.
     pub refused: Refusals,
-    /// Vertices that never move or disappear: non-manifold or inconsistently oriented
-    /// neighbourhoods (frozen: no collapse touches them), and the anchors that may take in a
-    /// neighbour: where three or more sets of attribute values meet, locked seams' vertices and
-    /// boundary vertices under [`BoundaryMode::Lock`].
+    /// Vertices that never move or disappear (each may take in neighbours, rule 1): non-manifold
+    /// or inconsistently oriented neighbourhoods (frozen), where three or more sets of attribute
+    /// values meet, locked seams' vertices and boundary vertices under [`BoundaryMode::Lock`].
     pub frozen_vertices: usize,
     /// Faces dropped before simplifying because they repeat a vertex index.
     pub dropped_degenerate_faces: usize,
