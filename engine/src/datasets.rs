@@ -23,15 +23,19 @@ pub fn shared_meshes_dir() -> Option<PathBuf> {
 /// message on stderr and `None`; under CI (`CI` set) a missing directory is a panic, so a test can
 /// never pass by silently skipping.
 pub fn require_shared_meshes(test: &str) -> Option<PathBuf> {
-    match shared_meshes_dir() {
+    require(test, shared_meshes_dir(), "meshes", MESHES_ENV)
+}
+
+/// The directory `found`, or — when it is missing — a loud message on stderr and `None`; a panic
+/// under CI (`CI` set).
+fn require(test: &str, found: Option<PathBuf>, what: &str, env: &str) -> Option<PathBuf> {
+    match found {
         Some(dir) => Some(dir),
         None if std::env::var_os("CI").is_some() => {
-            panic!("{test}: shared meshes not found (set {MESHES_ENV}); CI must run with them")
+            panic!("{test}: shared {what} not found (set {env}); CI must run with them")
         }
         None => {
-            eprintln!(
-                "\n!!! {test}: SKIPPED — shared meshes not found (set {MESHES_ENV} or provide ../shared/meshes) !!!\n"
-            );
+            eprintln!("\n!!! {test}: SKIPPED — shared {what} not found (set {env} or provide ../shared) !!!\n");
             None
         }
     }
@@ -43,31 +47,28 @@ pub const TEXTURED_ENV: &str = "MESHLOD_TEXTURED";
 /// The shared textured assets (glTF, OBJ + MTL with images; `MANIFEST.tsv` inside), if present:
 /// `$MESHLOD_TEXTURED`, else `textured/` beside the shared meshes, else `../shared/textured`.
 pub fn shared_textured_dir() -> Option<PathBuf> {
-    if let Some(dir) = std::env::var_os(TEXTURED_ENV) {
+    shared_manifest_dir(TEXTURED_ENV, "textured")
+}
+
+/// A shared folder with a `MANIFEST.tsv`: `$env`, else `name/` beside the shared meshes, else
+/// `../shared/name` relative to the current directory or to the workspace root.
+fn shared_manifest_dir(env: &str, name: &str) -> Option<PathBuf> {
+    if let Some(dir) = std::env::var_os(env) {
         let dir = PathBuf::from(dir);
         return dir.is_dir().then_some(dir);
     }
-    let beside = shared_meshes_dir().and_then(|m| m.parent().map(|p| p.join("textured")));
+    let beside = shared_meshes_dir().and_then(|m| m.parent().map(|p| p.join(name)));
     let workspace = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
     beside
         .into_iter()
-        .chain([PathBuf::from("../shared/textured"), workspace.join("../shared/textured")])
+        .chain([PathBuf::from("../shared").join(name), workspace.join("../shared").join(name)])
         .find(|d| d.join("MANIFEST.tsv").is_file())
 }
 
 /// [`require_shared_meshes`] for the textured assets: the directory, or a loud message (a panic
 /// under CI) when they are missing.
 pub fn require_shared_textured(test: &str) -> Option<PathBuf> {
-    match shared_textured_dir() {
-        Some(dir) => Some(dir),
-        None if std::env::var_os("CI").is_some() => {
-            panic!("{test}: shared textured assets not found (set {TEXTURED_ENV}); CI must run with them")
-        }
-        None => {
-            eprintln!("\n!!! {test}: SKIPPED — shared textured assets not found (set {TEXTURED_ENV}) !!!\n");
-            None
-        }
-    }
+    require(test, shared_textured_dir(), "textured assets", TEXTURED_ENV)
 }
 
 /// Environment variable naming the shared corpus directory (binary PLY, `MANIFEST.tsv` inside).
@@ -76,31 +77,13 @@ pub const CORPUS_ENV: &str = "MESHLOD_CORPUS";
 /// The shared corpus, if present: `$MESHLOD_CORPUS`, else `corpus/` beside the shared meshes, else
 /// `../shared/corpus`.
 pub fn shared_corpus_dir() -> Option<PathBuf> {
-    if let Some(dir) = std::env::var_os(CORPUS_ENV) {
-        let dir = PathBuf::from(dir);
-        return dir.is_dir().then_some(dir);
-    }
-    let beside = shared_meshes_dir().and_then(|m| m.parent().map(|p| p.join("corpus")));
-    let workspace = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
-    beside
-        .into_iter()
-        .chain([PathBuf::from("../shared/corpus"), workspace.join("../shared/corpus")])
-        .find(|d| d.join("MANIFEST.tsv").is_file())
+    shared_manifest_dir(CORPUS_ENV, "corpus")
 }
 
 /// [`require_shared_meshes`] for the corpus: the directory, or a loud message (a panic under CI)
 /// when it is missing.
 pub fn require_shared_corpus(test: &str) -> Option<PathBuf> {
-    match shared_corpus_dir() {
-        Some(dir) => Some(dir),
-        None if std::env::var_os("CI").is_some() => {
-            panic!("{test}: shared corpus not found (set {CORPUS_ENV}); CI must run with it")
-        }
-        None => {
-            eprintln!("\n!!! {test}: SKIPPED — shared corpus not found (set {CORPUS_ENV}) !!!\n");
-            None
-        }
-    }
+    require(test, shared_corpus_dir(), "corpus", CORPUS_ENV)
 }
 
 /// Path of one shared mesh file (`name` without extension), if the directory and the file exist.

@@ -65,6 +65,8 @@ impl WedgeQuadrics {
         let mut values = Vec::new();
         let mut single = vec![NONE; mesh.vertex_count()];
         let mut wedge_count = 0u32;
+        // (While counting: a vertex seen with two wedges.)
+        const SEVERAL: u32 = NONE - 1;
         for (k, &v) in mesh.triangles.iter().flatten().enumerate() {
             // A corner's number is the first corner of its vertex with its values.
             let first = value_id[k] as usize;
@@ -80,10 +82,10 @@ impl WedgeQuadrics {
                 wedge_of[k] = wedge_of[first];
             }
             let slot = &mut single[v as usize];
-            *slot = if *slot == NONE || *slot == wedge_of[k] { wedge_of[k] } else { NONE - 1 };
+            *slot = if *slot == NONE || *slot == wedge_of[k] { wedge_of[k] } else { SEVERAL };
         }
         for slot in &mut single {
-            if *slot == NONE - 1 {
+            if *slot == SEVERAL {
                 *slot = NONE;
             }
         }

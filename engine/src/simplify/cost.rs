@@ -18,15 +18,21 @@ impl State<'_> {
     /// direction and placement. Geometry-independent rules only; the rest is in `is_legal`.
     pub(crate) fn evaluate(&self, a: u32, b: u32) -> Option<Candidate> {
         let choice = self.choose(a, b)?;
-        let (survivor, removed) = match choice.keep {
-            Keep::A => (a, b),
-            Keep::B => (b, a),
-            // The survivor of a moving collapse: the endpoint that already has more faces, so
-            // fewer faces change corners (smaller vertex split).
-            Keep::Larger if self.fans[a as usize].len() >= self.fans[b as usize].len() => (a, b),
-            Keep::Larger => (b, a),
-        };
+        let survivor = self.survivor(choice.keep, a, b);
+        let removed = survivor ^ a ^ b;
         Some(Candidate { cost: choice.cost, survivor, removed, position: to_f32(choice.position) })
+    }
+
+    /// The endpoint of edge {a, b} that `keep` names. The survivor of a moving collapse is the
+    /// endpoint that already has more faces, so fewer faces change corners (smaller vertex split).
+    #[inline]
+    pub(super) fn survivor(&self, keep: Keep, a: u32, b: u32) -> u32 {
+        match keep {
+            Keep::A => a,
+            Keep::B => b,
+            Keep::Larger if self.fans[a as usize].len() >= self.fans[b as usize].len() => a,
+            Keep::Larger => b,
+        }
     }
 
     /// QFVP's normal term `(1 − cos θ)^w` of an edge with these endpoints (1 for QEM and w = 0).

@@ -104,7 +104,8 @@ impl State<'_> {
                 let appearance = |survivor: u32, p: DVec3| {
                     if weighted { self.attribute_error(survivor, survivor ^ a ^ b, p) } else { 0.0 }
                 };
-                // The survivor of a moving collapse ([`State::evaluate`]).
+                // The survivor of a moving collapse: [`State::survivor`], written out here (calling
+                // it from this closure cost 0.7% more instructions on the bunny, callgrind).
                 let mover_vertex = || match mover {
                     Keep::A => a,
                     Keep::B => b,
