@@ -1,12 +1,13 @@
 //! Runs simplifications for profiling and for checking that a speed change kept the output.
 //!
-//! `cargo run --release -p meshlod-engine --example profile_simplify -- FILE [KEEP] [REPEAT] [--peer] [--digest]`
+//! `cargo run --release -p meshlod-engine --example profile_simplify -- FILE [KEEP] [REPEAT] [--peer] [--guard] [--no-distance-term] [--digest]`
 //!
 //! - default: QFVP w = 1 with progressive-mesh records (the simplify bench's case) to KEEP of the
 //!   faces (default 0.1), REPEAT times (default 5); prints each time and the best. Run it under
 //!   `valgrind --tool=callgrind` with REPEAT 1 for instruction counts.
 //! - `--peer`: meshoptimizer's `simplify` on the same mesh and target instead.
 //! - `--guard`: w = 0 (the default) with the distance guard at weight 1.
+//! - `--no-distance-term`: the fan-distance term off (the cost as the paper has it).
 //! - `--digest`: one hash per (w, placement) of the output mesh and the vertex splits, and one for
 //!   Melax: a change meant to be output-preserving must print the same lines before and after.
 
@@ -20,7 +21,9 @@ use meshlod_engine::Mesh;
 use meshlod_engine::simplify::{Metric, Placement, SimplifyOptions, prepare, simplify};
 
 fn options(mesh: &Mesh, keep: f64, metric: Metric, placement: Placement) -> SimplifyOptions {
+    let term_off = std::env::args().any(|a| a == "--no-distance-term");
     SimplifyOptions {
+        distance_term: if term_off { 0.0 } else { meshlod_engine::simplify::DEFAULT_DISTANCE_TERM },
         target_faces: Some((mesh.face_count() as f64 * keep).round() as usize),
         target_ratio: None,
         metric,
@@ -59,7 +62,7 @@ fn main() {
     let flag = |name: &str| args.iter().any(|a| a == name);
     let positional: Vec<&String> = args.iter().filter(|a| !a.starts_with("--")).collect();
     let Some(path) = positional.first() else {
-        eprintln!("usage: profile_simplify FILE [KEEP] [REPEAT] [--peer] [--guard] [--digest]");
+        eprintln!("usage: profile_simplify FILE [KEEP] [REPEAT] [--peer] [--guard] [--no-distance-term] [--digest]");
         std::process::exit(2);
     };
     let mesh = prepare(&meshlod_engine::io::read_mesh(path.as_str()).expect("reads")).0;

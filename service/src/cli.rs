@@ -276,6 +276,11 @@ pub struct SimplifyArgs {
     /// `--guard` alone is weight 1; 0 is off.
     #[arg(long, value_name = "WEIGHT", num_args = 0..=1, default_missing_value = "1")]
     pub guard: Option<f64>,
+    /// Weight of the fan-distance term (default 1; 0 leaves the paper's QFVP/QEM cost as it is):
+    /// each collapse also pays for how far it moves the faces it changes, measured on those faces
+    /// alone. Ignored with Melax and with --guard (docs/meshlab-comparison.md).
+    #[arg(long, value_name = "WEIGHT")]
+    pub distance_term: Option<f64>,
     /// Also write the progressive mesh (base + vertex splits) to this .pm file: the compact form,
     /// positions and values on 16-bit grids (docs/pm-format.md).
     #[arg(long)]
@@ -329,6 +334,7 @@ impl SimplifyArgs {
             return_progressive: self.pm.is_some(),
             compute_hausdorff: self.hausdorff,
             guard: self.guard,
+            distance_term: self.distance_term,
             progressive_lossless: self.pm_lossless,
             attribute_weights: self.attribute_weights,
         };

@@ -345,6 +345,7 @@ impl TryFrom<&proto::SimplifyOptions> for SimplifyOptions {
             max_normal_change_degrees: o.max_normal_change_degrees.unwrap_or(defaults.max_normal_change_degrees),
             record_progressive: o.return_progressive,
             guard: o.guard.unwrap_or(defaults.guard),
+            distance_term: o.distance_term.unwrap_or(defaults.distance_term),
             lock_seams: o.lock_seams,
             attribute_weights: o.attribute_weights.as_ref().map_or(defaults.attribute_weights, |w| {
                 meshlod_engine::simplify::AttributeWeights { uv: w.uv, normal: w.normal, color: w.color }

@@ -129,6 +129,7 @@ pub fn simplify(
         seconds: s.seconds,
         w_candidates,
         guard: options.guard,
+        distance_term: s.distance_term,
         warnings: simplify_warnings(o).into_iter().chain(mesh.corners.not_carried_warning()).collect(),
         frozen_vertices: s.frozen_vertices as u32,
         target_faces: s.target_faces as u32,

@@ -27,7 +27,7 @@ fn main() -> ExitCode {
 }
 
 /// The command-line flag of each request field an error can start with.
-const FLAGS: [(&str, &str); 14] = [
+const FLAGS: [(&str, &str); 15] = [
     ("options.target_ratio", "--ratio"),
     ("options.target_faces", "--faces"),
     ("options.max_error", "--max-error"),
@@ -35,6 +35,7 @@ const FLAGS: [(&str, &str); 14] = [
     ("options.w_auto", "--w auto"),
     ("options.w", "--w"),
     ("options.guard", "--guard"),
+    ("options.distance_term", "--distance-term"),
     ("options.max_normal_change_degrees", "--max-normal-change"),
     ("target_ratio", "--ratio"),
     ("target_faces", "--faces"),

@@ -63,6 +63,7 @@ pub fn simplify(s: &proto::SimplifyStats, measured: Option<&proto::HausdorffRepo
         "normals": s.normals,
         "boundary": s.boundary,
         "guard": s.guard,
+        "distance_term": s.distance_term,
         "max_collapse_error_paper": s.max_collapse_error,
         "seconds": s.seconds,
         "warnings": s.warnings,

@@ -2,7 +2,7 @@
 //! the metric prefers ([`State::evaluate`]), its placement chosen in `placement.rs`.
 
 use super::kernel::{State, VertexData, to_f32};
-use super::placement::Keep;
+use super::placement::{Choice, Keep};
 
 /// A collapse ready to apply: `removed` merges into `survivor`, which moves to `position`.
 #[derive(Debug, Clone, Copy)]
@@ -17,10 +17,14 @@ impl State<'_> {
     /// The collapse of edge {a, b} the metric prefers, or `None` if the rules forbid every
     /// direction and placement. Geometry-independent rules only; the rest is in `is_legal`.
     pub(crate) fn evaluate(&self, a: u32, b: u32) -> Option<Candidate> {
-        let choice = self.choose(a, b)?;
+        Some(self.candidate(a, b, self.choose(a, b)?))
+    }
+
+    /// The collapse of edge {a, b} that `choice` ([`State::choose`]'s answer for it) describes.
+    pub(super) fn candidate(&self, a: u32, b: u32, choice: Choice) -> Candidate {
         let survivor = self.survivor(choice.keep, a, b);
         let removed = survivor ^ a ^ b;
-        Some(Candidate { cost: choice.cost, survivor, removed, position: to_f32(choice.position) })
+        Candidate { cost: choice.cost, survivor, removed, position: to_f32(choice.position) }
     }
 
     /// The endpoint of edge {a, b} that `keep` names. The survivor of a moving collapse is the

@@ -9,6 +9,7 @@ use crate::mesh::Mesh;
 use crate::queue::order_key;
 
 use super::kernel::{NONE, State, to_f64};
+use super::placement::Choice;
 
 /// Marks a queue entry's `b` when its key includes the distance guard's term.
 pub(super) const GUARDED: u32 = 1 << 31;
@@ -132,16 +133,26 @@ pub(super) fn fan_distance2(q: DVec3, p: DVec3, far_edges: &[(DVec3, DVec3)]) ->
 }
 
 impl State<'_> {
-    /// The queue key of edge {a, b} with the distance guard's term added: never below the key
-    /// [`State::entry`] gives it, which leaves the term out.
-    pub(super) fn guarded_key(&self, guard: &DistanceGuard, a: u32, b: u32) -> Option<u32> {
+    /// Whether queue keys leave out a distance term that candidates pay when they reach the top
+    /// (the distance guard's or the fan-distance term).
+    pub(super) fn has_distance_term(&self) -> bool {
+        self.guard.is_some() || self.fan_term > 0.0
+    }
+
+    /// The queue key of edge {a, b} with its distance term added (the distance guard's when it is
+    /// on, else the fan-distance term): never below the key [`State::entry`] gives it, which
+    /// leaves the term out; with the choice it was computed for.
+    pub(super) fn guarded_key(&self, a: u32, b: u32) -> Option<(u32, Choice)> {
         let choice = self.choose(a, b)?;
         let (va, vb) = (&self.vertices[a as usize], &self.vertices[b as usize]);
         let area = va.quadric.weight + vb.quadric.weight;
-        let d2 = self.guard_distance2(guard, a, b, choice.position);
         let factor = self.normal_factor(va, vb);
         let length2 = (to_f64(va.position) - to_f64(vb.position)).length_squared();
-        Some(order_key((choice.error + self.options.guard * area * d2) * factor, choice.error, length2))
+        let (weight, d2) = match &self.guard {
+            Some(guard) => (self.options.guard, self.guard_distance2(guard, a, b, choice.position)),
+            None => (self.fan_term, self.fan_distance2(a, b, choice.position)),
+        };
+        Some((order_key((choice.error + weight * area * d2) * factor, choice.error, length2), choice))
     }
 
     /// The squared distance the guard charges for collapsing {a, b} to `p`: the larger of the

@@ -15,6 +15,7 @@ use super::attribute_quadric::WedgeQuadrics;
 use super::classify::{Scan, VertexKind, scan_fans};
 use super::guard::DistanceGuard;
 use super::legality::{CONE_MIN_QUALITY, Legal, NormalCone, triangle_quality};
+use super::options::Metric;
 use super::options::{BoundaryMode, NormalUpdate, SimplifyOptions};
 
 /// Weight of the boundary-constraint planes relative to the face planes.
@@ -57,6 +58,9 @@ pub(crate) struct State<'o> {
     pub(super) cos_max_normal_change: f64,
     /// What the distance guard measures with, when it is on.
     pub(super) guard: Option<DistanceGuard>,
+    /// Weight of the fan-distance term (`fan_term`): the options' where it applies (a quadric
+    /// cost, the distance guard off), else 0.
+    pub(super) fan_term: f64,
     /// Per-corner attributes carried through the collapses ([`State::carry_attributes`]): the
     /// input's values, and for each current corner (3 per face) the input corner whose values it
     /// has. Empty when the input has none (the collapse then pays nothing for them).
@@ -168,6 +172,11 @@ impl<'o> State<'o> {
             check_id: 0,
             cos_max_normal_change: options.max_normal_change_degrees.to_radians().cos(),
             guard: None,
+            fan_term: match options.metric {
+                Metric::Melax => 0.0,
+                _ if options.guard > 0.0 => 0.0,
+                _ => options.distance_term,
+            },
             attributes: CornerAttributes::default(),
             value_id: Vec::new(),
             corner_source: Vec::new(),

@@ -294,7 +294,7 @@ impl State<'_> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
     fn random_unit(rng: &mut crate::rng::SplitMix64) -> DVec3 {
@@ -358,7 +358,7 @@ mod tests {
     /// A hexagonal wheel: centre 0, inner ring 1..=6 at radius 1, outer ring 7..=12 at radius 2
     /// (the border). The centre and the inner ring are interior vertices; every far edge of the
     /// centre's fan has a face across it.
-    fn wheel() -> Mesh {
+    pub(in crate::simplify) fn wheel() -> Mesh {
         let ring = |r: f32, k: u32| {
             let a = (k as f32) * std::f32::consts::FRAC_PI_3;
             [r * a.cos(), r * a.sin(), 0.0]

@@ -143,6 +143,14 @@ pub struct SimplifyOptions {
     /// covers quadric error's blind spot, a thin tip shortened along its own faces, at a price in
     /// time and memory given in docs/benchmarks.md; not with Melax.
     pub guard: f64,
+    /// Weight of the fan-distance term, ≥ 0 (default [`DEFAULT_DISTANCE_TERM`]; 0 leaves the
+    /// paper's cost as it is). Each QEM/QFVP collapse cost also pays `distance_term · A · d²`
+    /// before the normal factor, like the guard's term but with d measured on the fans the
+    /// collapse changes only: from each new face's centroid to the plane of the face it was, and
+    /// from each endpoint to the new faces that were its own (the module doc's "fan-distance
+    /// term"). Costs a few percent in time; ignored with Melax and while the guard is on (the
+    /// guard measures against the input instead).
+    pub distance_term: f64,
     /// Keep every vertex on a seam (where a vertex's corners differ in texture coordinates,
     /// normals, colours or material) in place: seams keep every vertex they had.
     pub lock_seams: bool,
@@ -171,6 +179,7 @@ impl Default for SimplifyOptions {
             max_normal_change_degrees: DEFAULT_MAX_NORMAL_CHANGE_DEGREES,
             record_progressive: false,
             guard: 0.0,
+            distance_term: DEFAULT_DISTANCE_TERM,
             lock_seams: false,
             attribute_weights: AttributeWeights::default(),
             cancel: None,
@@ -233,6 +242,9 @@ pub struct SimplifyStats {
     pub frozen_vertices: usize,
     /// Faces dropped before simplifying because they repeat a vertex index.
     pub dropped_degenerate_faces: usize,
+    /// The fan-distance term's weight that applied: 0 where it was off or did not apply (Melax,
+    /// the distance guard on).
+    pub distance_term: f64,
     /// Wall time in seconds.
     pub seconds: f64,
 }
@@ -253,6 +265,10 @@ pub const DEFAULT_TARGET_RATIO: f64 = 0.5;
 
 /// The largest face-normal change a collapse may cause by default, degrees.
 pub const DEFAULT_MAX_NORMAL_CHANGE_DEGREES: f64 = 90.0;
+
+/// Default weight of the fan-distance term ([`SimplifyOptions::distance_term`]): the weight at
+/// which it gave the lowest errors beside meshoptimizer and MeshLab (docs/meshlab-comparison.md).
+pub const DEFAULT_DISTANCE_TERM: f64 = 1.0;
 
 impl SimplifyOptions {
     /// Checks every option on its own and against the others; errors name the field.
@@ -286,6 +302,13 @@ impl SimplifyOptions {
             return Err(MeshError::InvalidParameter {
                 name: "guard",
                 reason: "the distance guard adds to the quadric costs (QFVP, QEM), not to Melax's".into(),
+            });
+        }
+        let term = self.distance_term;
+        if !(term.is_finite() && term >= 0.0) {
+            return Err(MeshError::InvalidParameter {
+                name: "distance_term",
+                reason: format!("{term} must be a finite number ≥ 0"),
             });
         }
         let a = self.attribute_weights;

@@ -106,20 +106,26 @@ pub(super) fn run(
         if !state.is_current(&entry) {
             continue; // stale: an endpoint changed (or was removed) since this entry was queued
         }
-        if let Some(guard) = &state.guard
-            && entry.b & GUARDED == 0
-        {
-            // Queued without the guard's term, which only adds: rank it with the term now, and
+        let mut chosen = None;
+        if state.has_distance_term() && entry.b & GUARDED == 0 {
+            // Queued without the distance term, which only adds: rank it with the term now, and
             // put it back unless it still comes first (the result is the greedy order of the
-            // guarded costs, at one measurement per candidate that reaches the top).
-            let Some(key) = state.guarded_key(guard, a, b) else { continue };
+            // full costs, at one measurement per candidate that reaches the top).
+            let Some((key, choice)) = state.guarded_key(a, b) else { continue };
             let guarded = QueueEntry::new(key, a, b | GUARDED, entry.stamp);
             if heap.top(current).is_some_and(|top| top.rank() < guarded.rank()) {
                 heap.push(guarded);
                 continue;
             }
+            chosen = Some(choice);
         }
-        let Some(candidate) = state.evaluate(a, b) else { continue };
+        let candidate = match chosen {
+            Some(choice) => state.candidate(a, b, choice),
+            None => match state.evaluate(a, b) {
+                Some(candidate) => candidate,
+                None => continue,
+            },
+        };
         let merged = state.vertices[a as usize].quadric + state.vertices[b as usize].quadric;
         let error_paper = units.to_paper(merged.distance(to_f64(candidate.position)));
         // Stop: the cheapest collapse left would exceed the error limit (costs are not errors, so
