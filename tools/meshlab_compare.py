@@ -5,15 +5,17 @@ Every result is measured with the same instrument (`meshlod hausdorff`: the cert
 of the symmetric distance, paper units) against the same cleaned, positions-only input. Writes a
 Markdown report (summary, then one row per cell) to --out, or prints it.
 
-Each --guard weight gives meshlod a column (0: no distance guard). The face count meshlod's first
-column reaches is the target of the peers: meshoptimizer's `simplify` (0.7, through the engine's
+Each --variant gives meshlod a column: `default` (its defaults, the fan-distance term on), `paper`
+(the paper's cost: --distance-term 0) and `guard` (--guard 1). The face count meshlod's first
+column reaches is the target of its other columns and of the peers: meshoptimizer's `simplify` (0.7, through the engine's
 `meshopt_simplify` example; it may stop above the target) and MeshLab's quadric edge collapse
 (pymeshlab, its defaults). Where a peer stops above that count (its rules leave it no collapse),
 meshlod's columns run again with the highest peer count as their target, so that the cell compares
 equal face counts. A cell counts in the summary when every result is within 2 % (or 2 faces) of
 that target. Results are cached (--cache, JSON lines), so an interrupted run resumes.
 
-Usage: meshlab_compare.py MESHLOD MESHOPT_EXAMPLE DIR [DIR ...] [--reduce 0.8 0.9 0.99] [--guard 0 1]
+Usage: meshlab_compare.py MESHLOD MESHOPT_EXAMPLE DIR [DIR ...] [--reduce 0.8 0.9 0.99]
+                          [--variant default paper guard]
                           [--w 0] [--cache FILE] [--out docs/meshlab-comparison.md] [--only NAME ...]
 """
 import argparse
@@ -26,6 +28,18 @@ import sys
 import tempfile
 
 import pymeshlab
+
+# meshlod's columns: label (the cache key) and the flags that make it.
+VARIANTS = {
+    "default": ("meshlod", []),
+    "paper": ("meshlod paper's cost", ["--distance-term", "0"]),
+    "guard": ("meshlod --guard", ["--guard", "1"]),
+}
+DESCRIBED = {
+    "default": "it runs by default (w = 0 with the fan-distance term)",
+    "paper": "the paper's cost alone (`--distance-term 0`)",
+    "guard": "with the distance guard (`--guard`, in place of the fan-distance term)",
+}
 
 # Errors below this (paper units) count as exact, so ratios between exact results stay finite.
 EXACT = 1e-6
@@ -57,13 +71,19 @@ def simplify_all(args, name, path, tmp, cache, targets, save):
         run(args.meshlod, "convert", path, original, "--clean", "--drop-attributes")
     for reduce in args.reduce:
         target = None
-        for g in args.guard:
-            key = f"meshlod guard {g:g}"
-            if (name, reduce, key) not in cache:
-                out = os.path.join(tmp, f"{name}-{reduce}-{g}.ply")
-                report = json.loads(run(args.meshlod, "simplify", original, "-o", out, "--ratio", reduce, "--w", args.w,
-                                        f"--guard={g}", "--json"))
-                save(name, reduce, key, report["faces_out"], hausdorff(args.meshlod, original, out))
+        for v in args.variant:
+            key = VARIANTS[v][0]
+            # The first column runs at the reduction; the others at the face count it reached (they
+            # may stop elsewhere where rules leave no collapse: the cell then does not count).
+            fits = (name, reduce, key) in cache and (
+                target is None or targets.get((name, reduce, key)) == target
+                or abs(cache[(name, reduce, key)][0] - target) <= max(2, 0.02 * target))
+            if not fits:
+                out = os.path.join(tmp, f"{name}-{reduce}-{v}.ply")
+                aim = ["--ratio", reduce] if target is None else ["--faces", target]
+                report = json.loads(run(args.meshlod, "simplify", original, "-o", out, *aim, "--w", args.w,
+                                        *VARIANTS[v][1], "--json"))
+                save(name, reduce, key, report["faces_out"], hausdorff(args.meshlod, original, out), target)
             target = target if target is not None else cache[(name, reduce, key)][0]
         # The peers' results hold for one target: a meshlod build that stops elsewhere reruns them.
         if (name, reduce, "meshoptimizer") not in cache or targets.get((name, reduce, "meshoptimizer")) != target:
@@ -82,18 +102,18 @@ def simplify_all(args, name, path, tmp, cache, targets, save):
         # with the highest peer count as its target, so that every cell compares equal face counts.
         highest = max(cache[(name, reduce, "meshoptimizer")][0], cache[(name, reduce, "MeshLab")][0])
         if highest > target + max(2, 0.02 * target):
-            for g in args.guard:
-                key = f"meshlod guard {g:g} at peers"
+            for v in args.variant:
+                key = f"{VARIANTS[v][0]} at peers"
                 if (name, reduce, key) in cache and targets.get((name, reduce, key)) == highest:
                     continue
-                out = os.path.join(tmp, f"{name}-{reduce}-{g}-at-peers.ply")
+                out = os.path.join(tmp, f"{name}-{reduce}-{v}-at-peers.ply")
                 report = json.loads(run(args.meshlod, "simplify", original, "-o", out, "--faces", highest, "--w", args.w,
-                                        f"--guard={g}", "--json"))
+                                        *VARIANTS[v][1], "--json"))
                 save(name, reduce, key, report["faces_out"], hausdorff(args.meshlod, original, out), highest)
 
 
 def report(args, names, cache):
-    simplifiers = [f"meshlod guard {g:g}" for g in args.guard] + ["meshoptimizer", "MeshLab"]
+    simplifiers = [VARIANTS[v][0] for v in args.variant] + ["meshoptimizer", "MeshLab"]
     cells = []
     for name in names:
         for reduce in args.reduce:
@@ -111,9 +131,9 @@ def report(args, names, cache):
     lines.append(
         f"Generated {datetime.date.today().isoformat()} by `tools/meshlab_compare.py` over "
         f"{len({c[0] for c in cells})} meshes (`{' '.join(args.dirs)}`) at {', '.join(f'{r:.0%}' for r in args.reduce)} "
-        f"reduction: meshlod at w = {args.w:g} without and with the distance guard (`--guard`), meshoptimizer 0.7 "
+        f"reduction: meshlod at w = {args.w:g} as {', '.join(DESCRIBED[v] for v in args.variant)}, meshoptimizer 0.7 "
         "(`simplify`, positions only, no error limit) and MeshLab's quadric edge collapse (pymeshlab 2025.7.post1, its "
-        "defaults), the peers aimed at the face count of meshlod's unguarded result; where a peer stopped above that "
+        f"defaults), the other columns aimed at the face count of meshlod's first column ({args.variant[0]}); where a peer stopped above that "
         "count, meshlod ran again with the highest peer count as its target (equal face counts). Every output measured by "
         "`meshlod hausdorff` against the same cleaned positions-only input: symmetric Hausdorff, certified upper bound "
         "(within 1e-3 of a reached distance), paper units. A cell counts below when every simplifier came within 2% "
@@ -123,7 +143,7 @@ def report(args, names, cache):
     for i, s in enumerate(simplifiers):
         logs = [math.log(max(c[2][i][1], EXACT) / max(c[2][-1][1], EXACT)) for c in fair]
         best = sum(c[2][i][1] <= min(r[1] for r in c[2]) for c in fair)
-        peers = "–" if i >= len(args.guard) else str(sum(c[2][i][1] <= min(c[2][-1][1], c[2][-2][1]) for c in fair))
+        peers = "–" if i >= len(args.variant) else str(sum(c[2][i][1] <= min(c[2][-1][1], c[2][-2][1]) for c in fair))
         geo = math.exp(sum(logs) / len(logs)) if logs else float("nan")
         lines.append(f"| {s} | {geo:.3f} | {best} / {len(fair)} | {peers} |")
     lines += ["", "\"Lowest error of all\" counts ties for each; \"at or below both peers\" compares one meshlod "
@@ -145,7 +165,7 @@ def main():
     ap.add_argument("dirs", nargs="+")
     ap.add_argument("--reduce", type=float, nargs="+", default=[0.8, 0.9, 0.99])
     ap.add_argument("--w", type=float, default=0.0)
-    ap.add_argument("--guard", type=float, nargs="+", default=[0.0, 1.0])
+    ap.add_argument("--variant", nargs="+", choices=sorted(VARIANTS), default=["default", "paper", "guard"])
     ap.add_argument("--cache", default=os.path.join(tempfile.gettempdir(), "meshlab-compare.jsonl"))
     ap.add_argument("--out", default=None)
     ap.add_argument("--only", nargs="*", default=[])
