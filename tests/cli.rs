@@ -206,6 +206,16 @@ fn simplify_pm_lod_chain() {
     assert_eq!(weighted["guard"], 0.3);
     fails_with(&["simplify", s(&input), "-o", s(&out), "--guard=-1"], "guard");
     fails_with(&["simplify", s(&input), "-o", s(&out), "--metric", "melax", "--guard"], "guard");
+    // The fan-distance term: on (weight 1) by default, set or turned off by its flag, reported as
+    // 0 where it does not apply (the guard replaces it).
+    assert_eq!(report["distance_term"], 1.0);
+    assert_eq!(guarded["distance_term"], 0.0);
+    let paper = ok_json(&["simplify", s(&input), "-o", s(&out), "--ratio", "0.9", "--distance-term", "0", "--json"]);
+    assert_eq!(paper["distance_term"], 0.0);
+    let heavier = ok_json(&["simplify", s(&input), "-o", s(&out), "--ratio", "0.9", "--distance-term", "2", "--json"]);
+    assert_eq!(heavier["distance_term"], 2.0);
+    fails_with(&["simplify", s(&input), "-o", s(&out), "--distance-term=-1"], "--distance-term");
+    fails_with(&["simplify", s(&input), "-o", s(&out), "--distance-term", "NaN"], "distance_term");
 }
 
 #[test]

@@ -76,6 +76,18 @@ async fn every_rpc_over_loopback() {
     assert_eq!(local.mesh, guarded);
     assert_ne!(guarded, out, "the guard changes the collapse order on a bumpy blob");
 
+    // So does the fan-distance term's weight: on by default, 0 gives the paper's cost.
+    assert_eq!(stats.distance_term, 1.0);
+    let mut request = simplify_request(&mesh, 0.9);
+    request.options.as_mut().unwrap().distance_term = Some(0.0);
+    let paper = client.simplify(request).await.unwrap().into_inner();
+    assert_eq!(paper.stats.as_ref().unwrap().distance_term, 0.0);
+    let paper = mesh_from_proto(paper.mesh.as_ref().unwrap(), "mesh", &MeshLimits::default()).unwrap();
+    let local =
+        simplify(&mesh, &SimplifyOptions { target_ratio: Some(0.9), distance_term: 0.0, ..Default::default() }).unwrap();
+    assert_eq!(local.mesh, paper);
+    assert_ne!(paper, out, "the fan-distance term changes the collapse order on a bumpy blob");
+
     // The same request uploaded in small chunks (client streaming) gives the same result.
     let unary = client.simplify(simplify_request(&mesh, 0.8)).await.unwrap().into_inner();
     let whole = mesh_to_proto(&mesh);
@@ -439,6 +451,13 @@ async fn invalid_requests_name_the_field() {
                 ..simplify_request(&procedural::icosphere(2), 0.5)
             },
             "options.guard",
+        ),
+        (
+            proto::SimplifyRequest {
+                options: Some(proto::SimplifyOptions { distance_term: Some(f64::INFINITY), ..Default::default() }),
+                ..simplify_request(&procedural::icosphere(2), 0.5)
+            },
+            "options.distance_term",
         ),
         (
             proto::SimplifyRequest {

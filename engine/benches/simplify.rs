@@ -1,12 +1,13 @@
-//! Simplification benchmark: meshlod (QFVP w = 1 unless a line says otherwise, with progressive-mesh
-//! records) beside meshoptimizer at the same target face count, in one process, single-threaded.
+//! Simplification benchmark: meshlod (its defaults, w = 0 with the fan-distance term, unless a line
+//! says otherwise; progressive-mesh records on) beside meshoptimizer at the same target face count,
+//! in one process, single-threaded.
 //! Prints one standard line per case:
 //! `input → output triangles, error, time, peer time, ratio`, plus throughput and peak memory.
 //!
 //! Run: `cargo bench -p meshlod-engine --bench simplify` (needs the shared meshes; the 2-million
 //! triangle case is ogre subdivided twice, or a procedural torus without them). `MESHLOD_BENCH_QUICK=1` runs one repetition.
-//! The "with the distance guard" lines price that option (`SimplifyOptions::guard`); the 2×
-//! target is for the lines without it.
+//! The "paper's cost" lines price the fan-distance term (they leave it out) and the "with the
+//! distance guard" lines that option (`SimplifyOptions::guard`); the 2× target is for the default.
 
 // The peak-tracking allocator needs `unsafe` (GlobalAlloc); benches only.
 #[allow(unsafe_code, dead_code)]
@@ -26,16 +27,25 @@ use peer::meshopt_simplify;
 #[global_allocator]
 static ALLOC: PeakAlloc = PeakAlloc;
 
-fn case(name: &str, mesh: &Mesh, keep: f64, runs: usize, measure_error: bool, guard: f64, w: f64) {
+/// What a line changes from the defaults.
+#[derive(Clone, Copy)]
+enum Variant {
+    Default,
+    /// The paper's QFVP at this w, without the fan-distance term.
+    Paper(f64),
+    /// The distance guard at weight 1 (w = 0).
+    Guard,
+}
+
+fn case(name: &str, mesh: &Mesh, keep: f64, runs: usize, measure_error: bool, variant: Variant) {
     let faces_in = mesh.face_count();
     let target = ((faces_in as f64) * keep).round() as usize;
-    let options = SimplifyOptions {
-        target_faces: Some(target),
-        target_ratio: None,
-        metric: Metric::Qfvp { w },
-        record_progressive: true,
-        guard,
-        ..Default::default()
+    let defaults =
+        SimplifyOptions { target_faces: Some(target), target_ratio: None, record_progressive: true, ..Default::default() };
+    let options = match variant {
+        Variant::Default => defaults,
+        Variant::Paper(w) => SimplifyOptions { metric: Metric::Qfvp { w }, distance_term: 0.0, ..defaults },
+        Variant::Guard => SimplifyOptions { guard: 1.0, ..defaults },
     };
     let ((ours, ours_time), (peer, peer_time)) =
         best_of_interleaved(runs, || simplify(mesh, &options).expect("simplifies"), || meshopt_simplify(mesh, target));
@@ -72,15 +82,19 @@ fn main() {
             for name in ["stanford-bunny", "nefertiti", "ogre"] {
                 let mesh = read_mesh(dir.join(format!("{name}.obj"))).expect("shared mesh reads");
                 let (mesh, _, _) = meshlod_engine::simplify::prepare(&mesh);
+                // What a caller gets without choosing anything.
                 for keep in [0.1, 0.01] {
-                    case(&format!("{name} keep {:.0}%", keep * 100.0), &mesh, keep, runs, true, 0.0, 1.0);
+                    case(&format!("{name} keep {:.0}%", keep * 100.0), &mesh, keep, runs, true, Variant::Default);
                 }
-                // The default cost (w = 0, plain QEM), so the figures cover what a caller gets
-                // without choosing w.
-                case(&format!("{name} keep 10% at w = 0 (the default)"), &mesh, 0.1, runs, true, 0.0, 0.0);
+                // The paper's cost, at the default w and at the paper's w = 1: the fan-distance
+                // term's price and gain.
+                for w in [0.0, 1.0] {
+                    let label = format!("{name} keep 10%, the paper's cost at w = {w}");
+                    case(&label, &mesh, 0.1, runs, true, Variant::Paper(w));
+                }
                 // The distance guard's price (an option, off by default), against the same peer.
                 let label = format!("{name} keep 10% with the distance guard (weight 1)");
-                case(&label, &mesh, 0.1, runs.min(2), true, 1.0, 1.0);
+                case(&label, &mesh, 0.1, runs.min(2), true, Variant::Guard);
             }
         }
         None => eprintln!("!!! shared meshes not found (set MESHLOD_MESHES): only the procedural case runs !!!"),
@@ -100,7 +114,6 @@ fn main() {
         0.01,
         if quick { 1 } else { 2 },
         false,
-        0.0,
-        1.0,
+        Variant::Default,
     );
 }
