@@ -2,7 +2,7 @@
 //!
 //! `cargo run --release -p meshlod-engine --example profile_simplify -- FILE [KEEP] [REPEAT] [--peer] [--guard] [--no-distance-term] [--digest]`
 //!
-//! - default: QFVP w = 1 with progressive-mesh records (the simplify bench's case) to KEEP of the
+//! - default: the engine's defaults (QFVP w = 0 with the fan-distance term) with progressive-mesh records (the simplify bench's case) to KEEP of the
 //!   faces (default 0.1), REPEAT times (default 5); prints each time and the best. Run it under
 //!   `valgrind --tool=callgrind` with REPEAT 1 for instruction counts.
 //! - `--peer`: meshoptimizer's `simplify` on the same mesh and target instead.
@@ -82,7 +82,7 @@ fn main() {
                 SimplifyOptions { guard: 1.0, ..options(&mesh, keep, Metric::Qfvp { w: 0.0 }, Placement::Optimal) };
             simplify(&mesh, &options).expect("simplifies").mesh.face_count()
         } else {
-            simplify(&mesh, &options(&mesh, keep, Metric::Qfvp { w: 1.0 }, Placement::Optimal))
+            simplify(&mesh, &options(&mesh, keep, Metric::Qfvp { w: 0.0 }, Placement::Optimal))
                 .expect("simplifies")
                 .mesh
                 .face_count()

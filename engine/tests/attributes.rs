@@ -390,6 +390,11 @@ fn locked_seams_keep_every_vertex_they_had() {
     };
     assert_eq!(run(true), before.len(), "every seam vertex kept in place");
     assert!(run(false) < before.len(), "without the lock the seam is simplified along itself");
+    // The fan-distance term does not apply to meshes with texture coordinates: reported off with
+    // them, on without them.
+    let term = |m: &Mesh| simplify(m, &SimplifyOptions { target_ratio: Some(0.8), ..Default::default() }).unwrap();
+    assert_eq!(term(&sphere).stats.distance_term, 0.0);
+    assert_eq!(term(&procedural::icosphere(3)).stats.distance_term, 1.0);
 }
 
 /// Corner `k`'s position and values, as bits (the key of [`face_multiset`]).

@@ -278,7 +278,8 @@ pub struct SimplifyArgs {
     pub guard: Option<f64>,
     /// Weight of the fan-distance term (default 1; 0 leaves the paper's QFVP/QEM cost as it is):
     /// each collapse also pays for how far it moves the faces it changes, measured on those faces
-    /// alone. Ignored with Melax and with --guard (docs/meshlab-comparison.md).
+    /// alone. Ignored with Melax, with --guard and on meshes with texture coordinates
+    /// (docs/meshlab-comparison.md, docs/attributes-report.md).
     #[arg(long, value_name = "WEIGHT")]
     pub distance_term: Option<f64>,
     /// Also write the progressive mesh (base + vertex splits) to this .pm file: the compact form,

@@ -254,6 +254,12 @@ impl<'o> State<'o> {
         if mesh.corners.is_empty() {
             return;
         }
+        // The fan-distance term is off with texture coordinates: on the textured assets it raised
+        // the position error on capsule and Lantern at 2-5x meshoptimizer's time
+        // (docs/attributes-report.md).
+        if mesh.corners.uvs.is_some() {
+            self.fan_term = 0.0;
+        }
         self.attributes = mesh.corners.clone();
         self.value_id = mesh.corners.value_ids(&mesh.triangles, mesh.vertex_count());
         self.corner_source = (0..3 * mesh.face_count() as u32).collect();

@@ -46,7 +46,9 @@
 //! the legality checks read next, and is queued lazily like the guard below; with it the default
 //! beats both meshoptimizer and MeshLab's quadric collapse on most cells of
 //! docs/meshlab-comparison.md, at the price in time given in docs/benchmarks.md. 0 gives the
-//! paper's cost unchanged.
+//! paper's cost unchanged. Meshes with texture coordinates go without it (their placement keeps
+//! endpoints): on two of the eight textured assets the term raised the position error, at 2–5×
+//! meshoptimizer's time (docs/attributes-report.md).
 //!
 //! ## The distance guard (optional, [`SimplifyOptions::guard`])
 //! Quadric error has a blind spot: shortening a thin tip (a cow's horn, a finger) moves its apex

@@ -148,8 +148,10 @@ pub struct SimplifyOptions {
     /// before the normal factor, like the guard's term but with d measured on the fans the
     /// collapse changes only: from each new face's centroid to the plane of the face it was, and
     /// from each endpoint to the new faces that were its own (the module doc's "fan-distance
-    /// term"). Costs a few percent in time; ignored with Melax and while the guard is on (the
-    /// guard measures against the input instead).
+    /// term"). Its price in time is in docs/benchmarks.md; ignored with Melax, while the guard is
+    /// on (the guard measures against the input instead) and on meshes with texture coordinates
+    /// (measured worse there, docs/attributes-report.md).
+    /// [`SimplifyStats::distance_term`] gives the weight that was used.
     pub distance_term: f64,
     /// Keep every vertex on a seam (where a vertex's corners differ in texture coordinates,
     /// normals, colours or material) in place: seams keep every vertex they had.
@@ -243,7 +245,7 @@ pub struct SimplifyStats {
     /// Faces dropped before simplifying because they repeat a vertex index.
     pub dropped_degenerate_faces: usize,
     /// The fan-distance term's weight that applied: 0 where it was off or did not apply (Melax,
-    /// the distance guard on).
+    /// the distance guard on, texture coordinates carried).
     pub distance_term: f64,
     /// Wall time in seconds.
     pub seconds: f64,
