@@ -83,8 +83,8 @@ async fn every_rpc_over_loopback() {
     let paper = client.simplify(request).await.unwrap().into_inner();
     assert_eq!(paper.stats.as_ref().unwrap().distance_term, 0.0);
     let paper = mesh_from_proto(paper.mesh.as_ref().unwrap(), "mesh", &MeshLimits::default()).unwrap();
-    let local =
-        simplify(&mesh, &SimplifyOptions { target_ratio: Some(0.9), distance_term: 0.0, ..Default::default() }).unwrap();
+    let local = simplify(&mesh, &SimplifyOptions { target_ratio: Some(0.9), distance_term: 0.0, ..Default::default() })
+        .unwrap();
     assert_eq!(local.mesh, paper);
     assert_ne!(paper, out, "the fan-distance term changes the collapse order on a bumpy blob");
 

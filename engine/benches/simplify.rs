@@ -40,8 +40,12 @@ enum Variant {
 fn case(name: &str, mesh: &Mesh, keep: f64, runs: usize, measure_error: bool, variant: Variant) {
     let faces_in = mesh.face_count();
     let target = ((faces_in as f64) * keep).round() as usize;
-    let defaults =
-        SimplifyOptions { target_faces: Some(target), target_ratio: None, record_progressive: true, ..Default::default() };
+    let defaults = SimplifyOptions {
+        target_faces: Some(target),
+        target_ratio: None,
+        record_progressive: true,
+        ..Default::default()
+    };
     let options = match variant {
         Variant::Default => defaults,
         Variant::Paper(w) => SimplifyOptions { metric: Metric::Qfvp { w }, distance_term: 0.0, ..defaults },

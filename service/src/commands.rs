@@ -3,7 +3,7 @@
 //! local tools. Text output is for people (counts first, 6 significant digits); `--json` prints
 //! the report as it is.
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -20,6 +20,15 @@ use meshlod_service::executor::{Executor, Local, load};
 use meshlod_service::report::{self, Report};
 use meshlod_service::server::{ServerConfig, serve_with_listener, shutdown_signal};
 use serde_json::Value;
+
+/// `println!` that hands a failed write back as an error instead of panicking: a reader that
+/// closes the pipe early (`meshlod info x.obj --json | head`) ends the command quietly
+/// (`main` exits with 141, as a process stopped by SIGPIPE does).
+macro_rules! out {
+    ($($arg:tt)*) => {
+        writeln!(std::io::stdout().lock(), $($arg)*)?
+    };
+}
 
 use crate::cli::{
     Cli, ClientOperation, Command, HealthArgs, LogFormat, PredictArgs, RefineArgs, ServeArgs, Shape, SimplifyArgs,
@@ -107,7 +116,7 @@ fn text(report: &Report, key: &str) -> String {
 }
 
 fn print_json(report: &Report) -> Result<()> {
-    println!("{}", serde_json::to_string_pretty(report)?);
+    out!("{}", serde_json::to_string_pretty(report)?);
     Ok(())
 }
 
@@ -117,9 +126,9 @@ fn warn_all(report: &Report) {
     }
 }
 
-fn print_hausdorff_line(report: &Report) {
+fn print_hausdorff_line(report: &Report) -> Result<()> {
     if report.contains_key("hausdorff_paper") {
-        println!(
+        out!(
             "  Hausdorff ≤ {} paper units (≥ {}, certified; {} % of the diagonal); mean {}, rms {}",
             sig(num(report, "hausdorff_paper")),
             sig(num(report, "hausdorff_lower_paper")),
@@ -128,6 +137,7 @@ fn print_hausdorff_line(report: &Report) {
             sig(num(report, "rms_paper")),
         );
     }
+    Ok(())
 }
 
 /// `simplify` and `client simplify`.
@@ -138,7 +148,7 @@ fn run_simplify(executor: &dyn Executor, args: &SimplifyArgs) -> Result<()> {
     if args.json {
         return print_json(&report);
     }
-    println!(
+    out!(
         "{} → {} faces, {} → {} vertices ({}): {} collapses, {} refused, {} frozen vertices",
         text(&report, "faces_in"),
         text(&report, "faces_out"),
@@ -154,7 +164,7 @@ fn run_simplify(executor: &dyn Executor, args: &SimplifyArgs) -> Result<()> {
     } else {
         format!(" w = {}", text(&report, "w"))
     };
-    println!(
+    out!(
         "  {}{w} ({}), {} placement, guard {}; {} s → {}",
         text(&report, "metric"),
         text(&report, "w_source"),
@@ -163,9 +173,9 @@ fn run_simplify(executor: &dyn Executor, args: &SimplifyArgs) -> Result<()> {
         sig(num(&report, "seconds")),
         args.output.display()
     );
-    print_hausdorff_line(&report);
+    print_hausdorff_line(&report)?;
     if let (Some(pm), true) = (&args.pm, report.contains_key("pm_bytes")) {
-        println!(
+        out!(
             "  progressive mesh: {} splits, {} bytes ({} bytes per split) → {}",
             text(&report, "pm_splits"),
             text(&report, "pm_bytes"),
@@ -184,7 +194,7 @@ fn run_refine(executor: &dyn Executor, args: &RefineArgs) -> Result<()> {
     if args.json {
         return print_json(&report);
     }
-    println!(
+    out!(
         "{} → {} faces ({}): ETC {} ({}), {} edges split, {} collapses; {} s → {}",
         text(&report, "faces_in"),
         text(&report, "faces_out"),
@@ -197,7 +207,7 @@ fn run_refine(executor: &dyn Executor, args: &RefineArgs) -> Result<()> {
         args.output.display()
     );
     if report.contains_key("reference_hausdorff_paper") {
-        println!(
+        out!(
             "  against {}: Hausdorff ≤ {} paper units (≥ {}, certified), mean {}",
             args.reference.as_deref().unwrap_or(Path::new("the reference")).display(),
             sig(num(&report, "reference_hausdorff_paper")),
@@ -221,7 +231,7 @@ fn run_predict(executor: &dyn Executor, args: &PredictArgs) -> Result<()> {
         .zip(&probabilities)
         .map(|(c, p)| format!("{}: {}", c, sig(p.as_f64().unwrap_or(f64::NAN))))
         .collect();
-    println!(
+    out!(
         "{} → {} faces: w = {} (probabilities {}), ETC ≈ {} to {}; model {}",
         text(&report, "faces_in"),
         text(&report, "target_faces"),
@@ -238,10 +248,10 @@ fn info(file: &Path, json: bool) -> Result<()> {
     let report = validate(&load(file)?);
     let value = serde_json::to_value(&report)?;
     if json {
-        println!("{}", serde_json::to_string_pretty(&value)?);
+        out!("{}", serde_json::to_string_pretty(&value)?);
         return Ok(());
     }
-    println!("{}", file.display());
+    out!("{}", file.display());
     // The report's own field order: counts first.
     for (key, v) in value.as_object().expect("report is an object") {
         let shown = match v {
@@ -253,7 +263,7 @@ fn info(file: &Path, json: bool) -> Result<()> {
             }
             other => other.to_string(),
         };
-        println!("  {:<30} {shown}", key.replace('_', " "));
+        out!("  {:<30} {shown}", key.replace('_', " "));
     }
     Ok(())
 }
@@ -284,7 +294,7 @@ fn measure(a: &Path, b: &Path, options: &HausdorffOptions, directed: bool, json:
         if json {
             return print_json(&report::hausdorff_directed(&d, options.tolerance));
         }
-        println!(
+        out!(
             "a → b: at most {} paper units (certified), at least {}; mean {}, rms {}",
             sig(d.max_upper),
             sig(d.max_lower),
@@ -297,13 +307,12 @@ fn measure(a: &Path, b: &Path, options: &HausdorffOptions, directed: bool, json:
     if json {
         return print_json(&report::hausdorff_full(&r));
     }
-    print_hausdorff(&r);
-    Ok(())
+    print_hausdorff(&r)
 }
 
 /// `meshlod hausdorff` in text: the certified figure first, then how it was obtained.
-fn print_hausdorff(r: &HausdorffReport) {
-    println!(
+fn print_hausdorff(r: &HausdorffReport) -> Result<()> {
+    out!(
         "Hausdorff ≤ {} paper units ({} % of the diagonal, {} absolute): certified upper bound; lower bound {} ({})",
         sig(r.hausdorff),
         sig(r.hausdorff_diag_pct),
@@ -315,20 +324,21 @@ fn print_hausdorff(r: &HausdorffReport) {
             format!("the work budget ran out before the tolerance {} was met", r.tolerance)
         }
     );
-    println!(
+    out!(
         "  a → b: [{}, {}]   b → a: [{}, {}]",
         sig(r.a_to_b.max_lower),
         sig(r.a_to_b.max_upper),
         sig(r.b_to_a.max_lower),
         sig(r.b_to_a.max_upper)
     );
-    println!(
+    out!(
         "  mean {}, rms {} (area-weighted, {} face samples); {} s",
         sig(r.mean),
         sig(r.rms),
         r.samples,
         sig(r.seconds)
     );
+    Ok(())
 }
 
 fn lod(
@@ -375,9 +385,9 @@ fn lod(
         let report = serde_json::json!({
             "level": level, "levels": pm.levels(), "faces": mesh.face_count(), "vertices": mesh.vertex_count()
         });
-        println!("{report}");
+        out!("{report}");
     } else {
-        println!("level {level} of {}: {} faces, {} vertices", pm.levels(), mesh.face_count(), mesh.vertex_count());
+        out!("level {level} of {}: {} faces, {} vertices", pm.levels(), mesh.face_count(), mesh.vertex_count());
     }
     Ok(())
 }
@@ -456,7 +466,7 @@ fn health(args: &HealthArgs) -> Result<()> {
             .await
             .map_err(|_| anyhow::anyhow!("{}: no answer within {} s", args.server, args.timeout))?
     })?;
-    println!("serving");
+    out!("serving");
     Ok(())
 }
 
@@ -470,7 +480,7 @@ fn demo(out_dir: Option<PathBuf>) -> Result<()> {
     let original_path = dir.join("blob.ply");
     write_mesh(&original_path, &original)?;
     let report = validate(&original);
-    println!(
+    out!(
         "demo mesh: {} vertices, {} faces, manifold and oriented: {} → {}",
         report.vertices,
         report.faces,
@@ -485,7 +495,7 @@ fn demo(out_dir: Option<PathBuf>) -> Result<()> {
     std::fs::write(&pm_path, &bytes).with_context(|| format!("writing {}", pm_path.display()))?;
     let base_path = dir.join("blob-base.ply");
     write_mesh(&base_path, &result.mesh)?;
-    println!(
+    out!(
         "simplified 90% with {} (w = {}): {} → {} faces in {} s; progressive mesh {} splits, {} bytes → {}",
         options.metric.name(),
         options.metric.w().unwrap_or(0.0),
@@ -496,11 +506,11 @@ fn demo(out_dir: Option<PathBuf>) -> Result<()> {
         bytes.len(),
         pm_path.display()
     );
-    println!("level of detail    faces   Hausdorff (paper units)   % of diagonal");
+    out!("level of detail    faces   Hausdorff (paper units)   % of diagonal");
     for faces in [result.stats.faces_out, 10_000, 25_000, original.face_count()] {
         let lod = pm.at_faces(faces);
         let d: HausdorffReport = hausdorff(&original, &lod, &HausdorffOptions::default())?;
-        println!(
+        out!(
             "  ≤ {faces:>7}    {:>7}   {:>20}    {:>10}",
             lod.face_count(),
             sig(d.hausdorff),
