@@ -59,7 +59,7 @@ pub(crate) struct State<'o> {
     /// What the distance guard measures with, when it is on.
     pub(super) guard: Option<DistanceGuard>,
     /// Weight of the fan-distance term (`fan_term`): the options' where it applies (a quadric
-    /// cost, the distance guard off), else 0.
+    /// cost, the distance guard off, no texture coordinates), else 0.
     pub(super) fan_term: f64,
     /// Per-corner attributes carried through the collapses ([`State::carry_attributes`]): the
     /// input's values, and for each current corner (3 per face) the input corner whose values it
