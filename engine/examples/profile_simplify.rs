@@ -2,8 +2,9 @@
 //!
 //! `cargo run --release -p meshlod-engine --example profile_simplify -- FILE [KEEP] [REPEAT] [--peer] [--guard] [--no-distance-term] [--digest]`
 //!
-//! - default: the engine's defaults (QFVP w = 0 with the fan-distance term) with progressive-mesh records (the simplify bench's case) to KEEP of the
-//!   faces (default 0.1), REPEAT times (default 5); prints each time and the best. Run it under
+//! - default: the engine's defaults (QFVP w = 0 with the fan-distance term) with progressive-mesh
+//!   records (the simplify bench's case) to KEEP of the faces (default 0.1), REPEAT times
+//!   (default 5); prints each time and the best. Run it under
 //!   `valgrind --tool=callgrind` with REPEAT 1 for instruction counts.
 //! - `--peer`: meshoptimizer's `simplify` on the same mesh and target instead.
 //! - `--guard`: w = 0 (the default) with the distance guard at weight 1.
@@ -21,15 +22,15 @@ use meshlod_engine::Mesh;
 use meshlod_engine::simplify::{Metric, Placement, SimplifyOptions, prepare, simplify};
 
 fn options(mesh: &Mesh, keep: f64, metric: Metric, placement: Placement) -> SimplifyOptions {
-    let term_off = std::env::args().any(|a| a == "--no-distance-term");
+    let defaults = SimplifyOptions::default();
     SimplifyOptions {
-        distance_term: if term_off { 0.0 } else { meshlod_engine::simplify::DEFAULT_DISTANCE_TERM },
+        distance_term: if std::env::args().any(|a| a == "--no-distance-term") { 0.0 } else { defaults.distance_term },
         target_faces: Some((mesh.face_count() as f64 * keep).round() as usize),
         target_ratio: None,
         metric,
         placement,
         record_progressive: true,
-        ..Default::default()
+        ..defaults
     }
 }
 

@@ -21,6 +21,10 @@ use meshlod_service::report::{self, Report};
 use meshlod_service::server::{ServerConfig, serve_with_listener, shutdown_signal};
 use serde_json::Value;
 
+use crate::cli::{
+    Cli, ClientOperation, Command, HealthArgs, LogFormat, PredictArgs, RefineArgs, ServeArgs, Shape, SimplifyArgs,
+};
+
 /// `println!` that hands a failed write back as an error instead of panicking: a reader that
 /// closes the pipe early (`meshlod info x.obj --json | head`) ends the command quietly
 /// (`main` exits with 141, as a process stopped by SIGPIPE does).
@@ -29,10 +33,6 @@ macro_rules! out {
         writeln!(std::io::stdout().lock(), $($arg)*)?
     };
 }
-
-use crate::cli::{
-    Cli, ClientOperation, Command, HealthArgs, LogFormat, PredictArgs, RefineArgs, ServeArgs, Shape, SimplifyArgs,
-};
 
 /// Runs one parsed command line.
 pub fn run(cli: Cli) -> Result<()> {

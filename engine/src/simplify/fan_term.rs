@@ -19,7 +19,7 @@ impl State<'_> {
     /// a collapse that leaves the surface where it was (a flat neighbourhood, a move along a
     /// straight boundary); never looks at the input, so it does not see error that earlier
     /// collapses left (the quadric does).
-    pub(super) fn fan_distance2(&self, a: u32, b: u32, p: DVec3) -> f64 {
+    pub(super) fn moved_fan_distance2(&self, a: u32, b: u32, p: DVec3) -> f64 {
         let mut worst: f64 = 0.0;
         for (v, other) in [(a, b), (b, a)] {
             let pv = self.point(v);
@@ -66,11 +66,11 @@ mod tests {
         let options = SimplifyOptions::default();
         let (state, _) = State::new(&mesh, &options);
         let p1 = state.point(1);
-        assert_eq!(state.fan_distance2(1, 0, p1), 0.0);
-        assert_eq!(state.fan_distance2(1, 0, (p1 + state.point(0)) / 2.0), 0.0);
+        assert_eq!(state.moved_fan_distance2(1, 0, p1), 0.0);
+        assert_eq!(state.moved_fan_distance2(1, 0, (p1 + state.point(0)) / 2.0), 0.0);
         // Lifted by h off the plane: every moved face's new centroid is h/3 off its old plane, and
         // each endpoint is less than h from the planes of its new faces (which pass through p).
-        let lifted = |h: f64| state.fan_distance2(1, 0, p1 + DVec3::Z * h);
+        let lifted = |h: f64| state.moved_fan_distance2(1, 0, p1 + DVec3::Z * h);
         for h in [1e-3, 0.1, 1.0] {
             let d2 = lifted(h);
             assert!(d2 >= (h / 3.0).powi(2) * (1.0 - 1e-12) && d2 < h * h, "h {h}: {d2}");

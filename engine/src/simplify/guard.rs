@@ -150,7 +150,7 @@ impl State<'_> {
         let length2 = (to_f64(va.position) - to_f64(vb.position)).length_squared();
         let (weight, d2) = match &self.guard {
             Some(guard) => (self.options.guard, self.guard_distance2(guard, a, b, choice.position)),
-            None => (self.fan_term, self.fan_distance2(a, b, choice.position)),
+            None => (self.fan_term, self.moved_fan_distance2(a, b, choice.position)),
         };
         Some((order_key((choice.error + weight * area * d2) * factor, choice.error, length2), choice))
     }

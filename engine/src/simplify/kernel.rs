@@ -15,8 +15,7 @@ use super::attribute_quadric::WedgeQuadrics;
 use super::classify::{Scan, VertexKind, scan_fans};
 use super::guard::DistanceGuard;
 use super::legality::{CONE_MIN_QUALITY, Legal, NormalCone, triangle_quality};
-use super::options::Metric;
-use super::options::{BoundaryMode, NormalUpdate, SimplifyOptions};
+use super::options::{BoundaryMode, Metric, NormalUpdate, SimplifyOptions};
 
 /// Weight of the boundary-constraint planes relative to the face planes.
 const BOUNDARY_WEIGHT: f64 = 10.0;
@@ -172,9 +171,11 @@ impl<'o> State<'o> {
             check_id: 0,
             cos_max_normal_change: options.max_normal_change_degrees.to_radians().cos(),
             guard: None,
+            // Off with texture coordinates: on the textured assets it raised the position error on
+            // capsule and Lantern at 2-5x meshoptimizer's time (docs/attributes-report.md).
             fan_term: match options.metric {
                 Metric::Melax => 0.0,
-                _ if options.guard > 0.0 => 0.0,
+                _ if options.guard > 0.0 || mesh.corners.uvs.is_some() => 0.0,
                 _ => options.distance_term,
             },
             attributes: CornerAttributes::default(),
@@ -253,12 +254,6 @@ impl<'o> State<'o> {
     pub(crate) fn carry_attributes(&mut self, mesh: &Mesh) {
         if mesh.corners.is_empty() {
             return;
-        }
-        // The fan-distance term is off with texture coordinates: on the textured assets it raised
-        // the position error on capsule and Lantern at 2-5x meshoptimizer's time
-        // (docs/attributes-report.md).
-        if mesh.corners.uvs.is_some() {
-            self.fan_term = 0.0;
         }
         self.attributes = mesh.corners.clone();
         self.value_id = mesh.corners.value_ids(&mesh.triangles, mesh.vertex_count());
