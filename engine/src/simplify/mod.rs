@@ -19,6 +19,8 @@
 //!    stamps, as in the paper); `fan_term` — the fan-distance term (on by default); `guard` —
 //!    the distance guard's term, when it is on (in place of the fan-distance term);
 //! 5. `run` — the loop: pop, check (`legality`, rules below), collapse (`kernel`), re-rank;
+//!    when the queue runs dry before the target, a new pass queues again the refused edges that
+//!    a collapse came within two edges of since (`retry`);
 //! 6. the output mesh and, if asked, the progressive mesh built from the log (`crate::pm`);
 //!    `search` runs the whole pipeline once per candidate w.
 //!
@@ -116,6 +118,7 @@ mod legality;
 mod options;
 mod placement;
 mod queue;
+mod retry;
 mod run;
 mod search;
 

@@ -19,6 +19,19 @@ impl State<'_> {
     /// queue passes `v + 1`, so that each edge is queued once (twice, its two entries would pop
     /// one after the other and be checked twice).
     pub(super) fn push_edges_above(&mut self, v: u32, from: u32, heap: &mut TieredQueue, neighbours: &mut Vec<u32>) {
+        self.push_edges_where(v, from, heap, neighbours, |_| true);
+    }
+
+    /// [`State::push_edges_above`] for the neighbours `keep` accepts.
+    #[inline]
+    pub(super) fn push_edges_where(
+        &mut self,
+        v: u32,
+        from: u32,
+        heap: &mut TieredQueue,
+        neighbours: &mut Vec<u32>,
+        keep: impl Fn(u32) -> bool,
+    ) {
         // Unique neighbours by mark stamps (no sort: the heap's total order makes push order moot).
         // Written unconditionally and kept by advancing the count: whether a corner's vertex was
         // seen already is as good as random (each is seen twice around an interior vertex).
@@ -31,7 +44,7 @@ impl State<'_> {
             for u in [c.next, c.prev] {
                 let mark = &mut self.mark[u as usize];
                 neighbours[count] = u;
-                count += ((*mark != stamp) & (u >= from)) as usize;
+                count += ((*mark != stamp) & (u >= from) && keep(u)) as usize;
                 *mark = stamp;
             }
         }

@@ -12,9 +12,10 @@ use crate::queue::{QueueEntry, TieredQueue};
 use super::guard::GUARDED;
 use super::kernel::{NONE, State, to_f64};
 use super::options::{Refusals, StopReason};
+use super::retry::Retry;
 
-/// Times the queue is rebuilt from all remaining edges when it runs dry before the target: a
-/// candidate refused earlier may have become legal after its neighbourhood changed.
+/// Passes at most: when the queue runs dry before the target, a new pass queues again the edges
+/// refused before a collapse came near them (`super::retry`), which may have become legal since.
 pub const MAX_PASSES: usize = 4;
 
 /// How often (in queue pops) the cancel flag is read.
@@ -62,6 +63,7 @@ pub(super) fn run(
     let mut log: Vec<CollapseRecord> = Vec::with_capacity((faces_in - target.min(faces_in)) / 2 + 16);
     let mut neighbours = Vec::new();
     let mut refused = Refusals::default();
+    let mut retry = Retry::default();
     let mut pops = 0usize;
     let mut passes = 1;
     let mut collapses_this_pass = 0;
@@ -86,13 +88,15 @@ pub(super) fn run(
             if passes >= MAX_PASSES || collapses_this_pass == 0 {
                 break StopReason::NoLegalCollapse;
             }
-            // Otherwise refused candidates may have become legal since: queue every edge again.
+            // Otherwise refused candidates may have become legal since: queue again every edge
+            // that a collapse came near after its last refusal (`retry`).
             passes += 1;
             collapses_this_pass = 0;
+            retry.prepare(state, &log);
             for v in 0..vertex_count as u32 {
                 if state.vertex_alive[v as usize] {
                     neighbours.clear();
-                    state.push_edges_above(v, v + 1, &mut heap, &mut neighbours);
+                    state.push_edges_where(v, v + 1, &mut heap, &mut neighbours, |u| retry.needs(v, u));
                 }
             }
             continue;
@@ -139,6 +143,7 @@ pub(super) fn run(
             Ok(legal) => legal,
             Err(refusal) => {
                 refused.count(refusal);
+                retry.refused(a, b, log.len());
                 continue;
             }
         };
