@@ -36,20 +36,22 @@ fn s(p: &Path) -> &str {
 #[test]
 fn a_reader_that_closes_the_pipe_early_ends_the_command_quietly() {
     // `meshlod info x.obj | head -0`: stdout's reader is gone before the first line is written.
+    // The pipe's read end is closed before the command starts (closing it after the spawn raced
+    // with the other tests' spawns, whose forks hold a copy of it until they exec).
     let dir = tempdir("pipe");
     let obj = dir.join("torus.obj");
     assert!(meshlod(&["generate", "torus", "-o", s(&obj), "--resolution", "16"]).status.success());
     for json in [false, true] {
         let mut args = vec!["info", s(&obj)];
         args.extend(json.then_some("--json"));
-        let mut child = Command::new(env!("CARGO_BIN_EXE_meshlod"))
+        let (reader, writer) = std::io::pipe().expect("a pipe");
+        drop(reader);
+        let out = Command::new(env!("CARGO_BIN_EXE_meshlod"))
             .args(&args)
-            .stdout(std::process::Stdio::piped())
+            .stdout(writer)
             .stderr(std::process::Stdio::piped())
-            .spawn()
+            .output()
             .expect("meshlod runs");
-        drop(child.stdout.take());
-        let out = child.wait_with_output().expect("meshlod ends");
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(stderr.is_empty(), "{args:?}: stderr '{stderr}'");
         assert_eq!(out.status.code(), Some(141), "{args:?}");
