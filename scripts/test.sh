@@ -40,10 +40,11 @@ validate() { node tools/gltf-validate/validate.js "$@"; }
 "$MESHLOD" generate torus -o "$gltf_out/torus.obj" --resolution 24
 "$MESHLOD" convert "$gltf_out/torus.obj" "$gltf_out/torus.glb"
 "$MESHLOD" simplify "$gltf_out/torus.obj" -o "$gltf_out/torus-10.gltf" --ratio 0.9 > /dev/null
-validate "$gltf_out/torus.glb" "$gltf_out/torus-10.gltf"
-# Every textured asset and spot, simplified to 10% as GLB, and its progressive mesh refined back to
-# the input as GLB: 0 errors of their own (an error the input has too, such as an image missing from
-# its folder, is reported as inherited).
+"$MESHLOD" convert "$gltf_out/torus.obj" "$gltf_out/torus-q.glb" --quantize
+validate "$gltf_out/torus.glb" "$gltf_out/torus-10.gltf" "$gltf_out/torus-q.glb"
+# Every textured asset and spot, simplified to 10% as GLB (and quantized, KHR_mesh_quantization), and
+# its progressive mesh refined back to the input as GLB: 0 errors of their own (an error the input
+# has too, such as an image missing from its folder, is reported as inherited).
 if [ -d "$MESHLOD_TEXTURED" ] && [ -f "$MESHLOD_MESHES/spot.obj" ]; then
   for input in "$MESHLOD_TEXTURED"/*/*.gltf "$MESHLOD_TEXTURED"/*/*.glb "$MESHLOD_TEXTURED"/*/*.obj \
     "$MESHLOD_MESHES/spot.obj"; do
@@ -52,9 +53,11 @@ if [ -d "$MESHLOD_TEXTURED" ] && [ -f "$MESHLOD_MESHES/spot.obj" ]; then
     "$MESHLOD" simplify "$input" -o "$gltf_out/$name-10.glb" --ratio 0.9 --pm "$gltf_out/$name.pm" > /dev/null
     # The finest level rebuilt from the progressive mesh, with its attributes and materials.
     "$MESHLOD" lod "$gltf_out/$name.pm" --vertices 100000000 -o "$gltf_out/$name-full.glb" > /dev/null
+    "$MESHLOD" simplify "$input" -o "$gltf_out/$name-10q.glb" --ratio 0.9 --quantize > /dev/null
+    outputs=("$gltf_out/$name-10.glb" "$gltf_out/$name-full.glb" "$gltf_out/$name-10q.glb")
     case "$input" in
-      *.gltf | *.glb) validate --input "$input" "$gltf_out/$name-10.glb" "$gltf_out/$name-full.glb" ;;
-      *) validate "$gltf_out/$name-10.glb" "$gltf_out/$name-full.glb" ;;
+      *.gltf | *.glb) validate --input "$input" "${outputs[@]}" ;;
+      *) validate "${outputs[@]}" ;;
     esac
   done
 elif [ -n "${CI:-}" ]; then

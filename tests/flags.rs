@@ -260,3 +260,50 @@ fn batch_manifest_rules() {
     let help = ok(&["batch", "--help"]);
     assert!(String::from_utf8_lossy(&help.stdout).contains("Any other key is an error"));
 }
+
+#[test]
+fn quantize_writes_khr_mesh_quantization_locally_and_through_the_client_and_only_to_gltf() {
+    let dir = tempdir("quantize");
+    // Refused before any work (the input does not exist) where the output is not glTF.
+    let missing = dir.join("missing.obj");
+    let ply = dir.join("o.ply");
+    fails_with(&["simplify", s(&missing), "-o", s(&ply), "--quantize"], "quantize");
+    fails_with(&["refine", s(&missing), "-o", s(&ply), "--etc", "1", "--quantize"], "quantize");
+    fails_with(&["convert", s(&missing), s(&ply), "--quantize"], "quantize");
+    fails_with(&["lod", s(&missing), "-o", s(&ply), "--faces", "10", "--quantize"], "quantize");
+
+    let input = dir.join("blob.obj");
+    ok(&["generate", "blob", "-o", s(&input), "--resolution", "24"]);
+    let document = |path: &std::path::Path| {
+        let bytes = std::fs::read(path).unwrap();
+        let length = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        let json: Value = serde_json::from_slice(&bytes[20..20 + length]).unwrap();
+        (json, bytes.len())
+    };
+    let required = |path: &std::path::Path| document(path).0["extensionsRequired"].clone();
+    let quantization = serde_json::json!(["KHR_mesh_quantization"]);
+    let (plain, local, remote, pm) =
+        (dir.join("plain.glb"), dir.join("local.glb"), dir.join("remote.glb"), dir.join("blob.pm"));
+    ok(&["simplify", s(&input), "-o", s(&plain), "--ratio", "0.8"]);
+    ok(&["simplify", s(&input), "-o", s(&local), "--ratio", "0.8", "--quantize", "--pm", s(&pm)]);
+    let server = Server::start();
+    let remote_args = ["simplify", s(&input), "-o", s(&remote), "--ratio", "0.8", "--quantize"];
+    ok(&[&["client", "--server", server.address.as_str()][..], &remote_args[..]].concat());
+    assert_eq!(required(&plain), Value::Null);
+    assert_eq!(required(&local), quantization);
+    assert_eq!(std::fs::read(&local).unwrap(), std::fs::read(&remote).unwrap(), "the client writes what local does");
+    assert!(document(&local).1 < document(&plain).1, "smaller");
+    // The grid moves a vertex by at most √3/2 of a step of 2/65535 paper units.
+    let moved = ok_json(&["hausdorff", s(&plain), s(&local), "--json"]);
+    let bound = 3f64.sqrt() / 65535.0;
+    assert!(moved["hausdorff_paper"].as_f64().unwrap() <= bound, "{moved}");
+    let (converted, level, refined) = (dir.join("c.gltf"), dir.join("l.glb"), dir.join("r.glb"));
+    ok(&["convert", s(&input), s(&converted), "--quantize"]);
+    ok(&["lod", s(&pm), "--faces", "500", "-o", s(&level), "--quantize"]);
+    ok(&["refine", s(&input), "-o", s(&refined), "--etc", "1", "--quantize"]);
+    for path in [&level, &refined] {
+        assert_eq!(required(path), quantization, "{path:?}");
+    }
+    let text: Value = serde_json::from_slice(&std::fs::read(&converted).unwrap()).unwrap();
+    assert_eq!(text["extensionsRequired"], quantization);
+}

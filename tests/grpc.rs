@@ -361,7 +361,7 @@ async fn encoded_glb_is_read_and_its_attributes_kept() {
     // The result asked for as a file: a GLB back (and no `mesh`), read as the same result; a
     // read-only format is refused by field before any work.
     let glb = include_bytes!("../engine/tests/fuzz-corpus/quad-nodes.glb").to_vec();
-    let ask = |format: proto::MeshFormat| proto::SimplifyRequest {
+    let ask = |format: proto::MeshFormat, quantize_output: bool| proto::SimplifyRequest {
         input: Some(proto::MeshInput {
             source: Some(proto::mesh_input::Source::File(proto::EncodedMesh {
                 data: glb.clone(),
@@ -370,8 +370,9 @@ async fn encoded_glb_is_read_and_its_attributes_kept() {
         }),
         options: Some(proto::SimplifyOptions { target_ratio: Some(0.5), ..Default::default() }),
         output_format: format as i32,
+        quantize_output,
     };
-    let response = client.simplify(ask(proto::MeshFormat::Gltf)).await.unwrap().into_inner();
+    let response = client.simplify(ask(proto::MeshFormat::Gltf, false)).await.unwrap().into_inner();
     assert!(response.mesh.is_none());
     let encoded = response.encoded.expect("the result as a file");
     assert_eq!(encoded.format, proto::MeshFormat::Gltf as i32);
@@ -385,7 +386,22 @@ async fn encoded_glb_is_read_and_its_attributes_kept() {
     .unwrap();
     assert_eq!(back.face_count() as u32, response.stats.unwrap().faces_out);
     assert_eq!(back.corners.names(), ["uv", "material"]);
-    let status = client.simplify(ask(proto::MeshFormat::Stl)).await.unwrap_err();
+    // Quantized (KHR_mesh_quantization; a quad: the JSON outweighs what it saves), read back as
+    // the same faces; GLB only.
+    let quantized = client.simplify(ask(proto::MeshFormat::Gltf, true)).await.unwrap().into_inner().encoded.unwrap();
+    assert!(quantized.data != encoded.data && quantized.data.windows(21).any(|w| w == b"KHR_mesh_quantization"));
+    let path = std::path::Path::new("q.glb");
+    let limits = meshlod_engine::io::ReadLimits::default();
+    assert_eq!(
+        meshlod_engine::io::read_mesh_bytes(&quantized.data, None, path, &limits).unwrap().face_count(),
+        back.face_count()
+    );
+    let status = client.simplify(ask(proto::MeshFormat::Obj, true)).await.unwrap_err();
+    assert!(
+        status.code() == tonic::Code::InvalidArgument && status.message().contains("quantize_output"),
+        "{status:?}"
+    );
+    let status = client.simplify(ask(proto::MeshFormat::Stl, false)).await.unwrap_err();
     assert_eq!(status.code(), tonic::Code::InvalidArgument);
     assert!(
         status.message().contains("output_format") && status.message().contains("read only"),

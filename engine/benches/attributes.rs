@@ -9,7 +9,8 @@
 //! (paper units) for both; then the appearance error ([`meshlod_engine::appearance`]): texture-space
 //! distance to the input's values at the nearest input point on the same chart (and, beside it,
 //! of any chart), in texels of a 1024² texture, and normal deviation in degrees, over 20 000 points spread over each result by
-//! area. Times: one thread, interleaved, best of 5.
+//! area. Times: one thread, interleaved, best of 5. Last, meshlod's result written as GLB with
+//! floats and quantized (`--quantize`): bytes, and how far quantizing moved the surface.
 //!
 //! Run: `cargo bench -p meshlod-engine --bench attributes`.
 
@@ -23,7 +24,7 @@ use common::best_of_interleaved;
 use meshlod_engine::Mesh;
 use meshlod_engine::appearance::{Spread, appearance_error};
 use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
-use meshlod_engine::io::read_mesh;
+use meshlod_engine::io::{MeshFormat, ReadLimits, WriteOptions, read_mesh, read_mesh_bytes, write_gltf_with};
 use meshlod_engine::simplify::{AttributeWeights, SimplifyOptions, simplify};
 
 /// The attribute quadrics' weights measured beside the default.
@@ -98,6 +99,7 @@ fn main() {
     );
     let mut appearance_rows = Vec::new();
     let mut term_rows = Vec::new();
+    let mut size_rows = Vec::new();
     for path in assets {
         let mesh = read_mesh(&path).expect("reads");
         let first = SimplifyOptions { target_ratio: Some(0.9), ..Default::default() };
@@ -170,6 +172,7 @@ fn main() {
             cell(a_term.normal_degrees, |s| s.mean),
             cell(a_ours.normal_degrees, |s| s.mean),
         ));
+        size_rows.push(quantized_row(&path, &ours.mesh));
         println!(
             "| {} | {} | {} | {} ({}) | {} | {} / {} | {:.5} | {:.5} | {:.2} | {:.1} ms | {:.1} ms | {:.2} |",
             path.file_name().and_then(|n| n.to_str()).unwrap_or("?"),
@@ -202,4 +205,36 @@ fn main() {
     for row in term_rows {
         println!("{row}");
     }
+    println!(
+        "\n| asset (meshlod at 10%, GLB) | vertex bytes, floats → quantized | file bytes, floats → quantized | position moved (certified Hausdorff, paper units) |\n\
+         |---|---:|---:|---:|"
+    );
+    for row in size_rows {
+        println!("{row}");
+    }
+}
+
+/// The GLB of `lod` with floats and quantized (`--quantize`): its vertex bytes, its file bytes,
+/// and how far quantizing moved the surface.
+fn quantized_row(path: &std::path::Path, lod: &Mesh) -> String {
+    let folder = std::env::temp_dir();
+    let write = |quantize: bool| {
+        let mut bytes = Vec::new();
+        let options = WriteOptions { quantize };
+        write_gltf_with(&mut bytes, lod, true, Some(&folder), &options).expect("writes");
+        let length = u32::from_le_bytes(bytes[12..16].try_into().expect("a GLB")) as usize;
+        let json: serde_json::Value = serde_json::from_slice(&bytes[20..20 + length]).expect("its JSON");
+        let views = json["bufferViews"].as_array().expect("views").iter();
+        let vertex: u64 = views.filter(|v| v["target"] == 34962).filter_map(|v| v["byteLength"].as_u64()).sum();
+        let mesh = read_mesh_bytes(&bytes, Some(MeshFormat::Gltf), path, &ReadLimits::default()).expect("reads back");
+        (vertex, bytes.len(), mesh)
+    };
+    let ((v_float, f_float, float), (v_quantized, f_quantized, quantized)) = (write(false), write(true));
+    let moved = hausdorff(&float, &quantized, &HausdorffOptions::default()).expect("measures").hausdorff;
+    format!(
+        "| {} | {v_float} → {v_quantized} ({:.2}) | {f_float} → {f_quantized} ({:.2}) | {moved:.1e} |",
+        path.file_name().and_then(|n| n.to_str()).unwrap_or("?"),
+        v_quantized as f64 / v_float as f64,
+        f_quantized as f64 / f_float as f64,
+    )
 }

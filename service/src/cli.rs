@@ -11,6 +11,7 @@ use std::time::Duration;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use meshlod_engine::hausdorff::HausdorffOptions;
+use meshlod_engine::io::WriteOptions;
 use meshlod_service::convert::MeshLimits;
 use meshlod_service::executor::{PredictJob, RefineJob, SimplifyJob};
 use meshlod_service::proto;
@@ -37,11 +38,12 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Convert a mesh to OBJ or PLY (input OBJ, PLY, STL, OFF or glTF; format from the extensions).
+    /// Convert a mesh between formats (in: OBJ, PLY, STL, OFF, glTF, GLB; out: OBJ, PLY, glTF, GLB;
+    /// formats from the extensions).
     Convert {
         /// Input mesh.
         input: PathBuf,
-        /// Output mesh (.obj or binary .ply).
+        /// Output mesh (.obj, binary .ply, .gltf or .glb).
         output: PathBuf,
         /// Weld coincident vertices, drop degenerate/duplicate faces and unreferenced vertices.
         #[arg(long)]
@@ -50,6 +52,10 @@ pub enum Command {
         /// copy; simplifying it then ignores the input's seams).
         #[arg(long)]
         drop_attributes: bool,
+        /// glTF output: store the vertex data as integers (KHR_mesh_quantization): about half
+        /// the bytes per vertex (positions on a 16-bit grid over the largest side).
+        #[arg(long)]
+        quantize: bool,
     },
     /// Symmetric Hausdorff distance between two meshes, with certified lower and upper bounds
     /// (units relative to A).
@@ -112,6 +118,10 @@ pub enum Command {
         /// Print one JSON object instead of text.
         #[arg(long)]
         json: bool,
+        /// glTF output: store the vertex data as integers (KHR_mesh_quantization): about half
+        /// the bytes per vertex (positions on a 16-bit grid over the largest side).
+        #[arg(long)]
+        quantize: bool,
     },
     /// Predict w and ETC for a mesh and a target with the shipped (or $MESHLOD_MODEL_DIR) model.
     Predict(PredictArgs),
@@ -230,6 +240,10 @@ pub struct SimplifyArgs {
     /// Output mesh (.obj, .ply, .gltf or .glb).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// glTF output: store the vertex data as integers (KHR_mesh_quantization): about half the
+    /// bytes per vertex (positions on a 16-bit grid over the largest side).
+    #[arg(long)]
+    pub quantize: bool,
     /// Keep at most this many faces.
     #[arg(long)]
     pub faces: Option<u32>,
@@ -339,7 +353,13 @@ impl SimplifyArgs {
             progressive_lossless: self.pm_lossless,
             attribute_weights: self.attribute_weights,
         };
-        SimplifyJob { input: self.input.clone(), output: self.output.clone(), options, pm: self.pm.clone() }
+        SimplifyJob {
+            input: self.input.clone(),
+            output: self.output.clone(),
+            write: WriteOptions { quantize: self.quantize },
+            options,
+            pm: self.pm.clone(),
+        }
     }
 }
 
@@ -351,6 +371,10 @@ pub struct RefineArgs {
     /// Output mesh (.obj, .ply, .gltf or .glb).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// glTF output: store the vertex data as integers (KHR_mesh_quantization): about half the
+    /// bytes per vertex (positions on a 16-bit grid over the largest side).
+    #[arg(long)]
+    pub quantize: bool,
     /// Energy threshold coefficient: threshold = ETC × mean face energy; `auto` (with --faces) takes
     /// the predictor's estimate instead of the exact search.
     #[arg(long, required_unless_present = "faces")]
@@ -392,7 +416,13 @@ impl RefineArgs {
             rounds: Some(self.rounds),
             ..Default::default()
         };
-        RefineJob { input: self.input.clone(), output: self.output.clone(), request, reference: self.reference.clone() }
+        RefineJob {
+            input: self.input.clone(),
+            output: self.output.clone(),
+            write: WriteOptions { quantize: self.quantize },
+            request,
+            reference: self.reference.clone(),
+        }
     }
 }
 

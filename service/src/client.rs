@@ -155,6 +155,8 @@ impl Executor for Remote {
                     input: Some(input),
                     options: Some(options),
                     output_format: output_format.map_or(0, |f| f as i32),
+                    // The result is written here (`job.write`), from the exact values.
+                    quantize_output: false,
                 };
                 client.simplify(self.request(request)?).await.map_err(status_error)
             }
@@ -176,7 +178,7 @@ impl Executor for Remote {
     }
 
     fn refine(&self, job: &RefineJob) -> Result<Report> {
-        meshlod_engine::io::output_format(&job.output)?;
+        job.write.check(meshlod_engine::io::output_format(&job.output)?)?;
         let mesh = load(&job.input)?;
         let (input, output_format) = input_of(&mesh)?;
         let request = proto::RefineRequest {

@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
 use meshlod_engine::hausdorff::{HausdorffOptions, HausdorffReport, directed_hausdorff, hausdorff};
-use meshlod_engine::io::{output_format, write_mesh};
+use meshlod_engine::io::{WriteOptions, output_format, write_mesh, write_mesh_with};
 use meshlod_engine::pm_format::{encode, read_pm};
 use meshlod_engine::procedural;
 use meshlod_engine::simplify::{SimplifyOptions, simplify};
@@ -38,7 +38,9 @@ macro_rules! out {
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Info { file, json } => info(&file, json),
-        Command::Convert { input, output, clean, drop_attributes } => convert(&input, &output, clean, drop_attributes),
+        Command::Convert { input, output, clean, drop_attributes, quantize } => {
+            convert(&input, &output, clean, drop_attributes, &WriteOptions { quantize })
+        }
         Command::Hausdorff { a, b, tolerance, samples, seed, directed, json } => {
             let options = HausdorffOptions { samples, seed, tolerance, cancel: None };
             measure(&a, &b, &options, directed, json)
@@ -47,8 +49,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Simplify(args) => run_simplify(&local(), &args),
         Command::Refine(args) => run_refine(&local(), &args),
         Command::Predict(args) => run_predict(&local(), &args),
-        Command::Lod { input, output, faces, vertices, max_error, json } => {
-            lod(&input, &output, faces, vertices, max_error, json)
+        Command::Lod { input, output, faces, vertices, max_error, json, quantize } => {
+            lod(&input, &output, faces, vertices, max_error, json, &WriteOptions { quantize })
         }
         Command::Serve(args) => serve(args),
         Command::Client(args) => {
@@ -268,8 +270,8 @@ fn info(file: &Path, json: bool) -> Result<()> {
     Ok(())
 }
 
-fn convert(input: &Path, output: &Path, do_clean: bool, drop_attributes: bool) -> Result<()> {
-    output_format(output)?;
+fn convert(input: &Path, output: &Path, do_clean: bool, drop_attributes: bool, write: &WriteOptions) -> Result<()> {
+    write.check(output_format(output)?)?;
     let mut mesh = load(input)?;
     if drop_attributes {
         mesh.corners = Default::default();
@@ -283,7 +285,7 @@ fn convert(input: &Path, output: &Path, do_clean: bool, drop_attributes: bool) -
         eprintln!("clean: {}", serde_json::to_string(&report)?);
         mesh = cleaned;
     }
-    write_mesh(output, &mesh)?;
+    write_mesh_with(output, &mesh, write)?;
     Ok(())
 }
 
@@ -348,8 +350,9 @@ fn lod(
     vertices: Option<usize>,
     max_error: Option<f32>,
     json: bool,
+    write: &WriteOptions,
 ) -> Result<()> {
-    output_format(output)?;
+    write.check(output_format(output)?)?;
     if max_error.is_some_and(|e| !(e.is_finite() && e >= 0.0)) {
         bail!("--max-error {} must be a finite number ≥ 0", max_error.unwrap_or_default());
     }
@@ -380,7 +383,7 @@ fn lod(
         _ => bail!("give one of --faces, --vertices or --max-error"),
     };
     let mesh = pm.at_level(level);
-    write_mesh(output, &mesh)?;
+    write_mesh_with(output, &mesh, write)?;
     if json {
         let report = serde_json::json!({
             "level": level, "levels": pm.levels(), "faces": mesh.face_count(), "vertices": mesh.vertex_count()

@@ -7,7 +7,7 @@ use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
-use meshlod_engine::io::{MeshFormat, ReadLimits, read_mesh_bytes};
+use meshlod_engine::io::{MeshFormat, ReadLimits, WriteOptions, read_mesh_bytes};
 use meshlod_engine::pm::{NO_VERTEX, ProgressiveMesh, StreamedSplit, VertexSplit};
 use meshlod_engine::simplify::{BoundaryMode, Metric, NormalUpdate, Placement, SimplifyOptions};
 use meshlod_engine::{Mesh, MeshError};
@@ -196,8 +196,24 @@ pub fn output_format(value: i32, field: &str) -> Result<Option<proto::MeshFormat
     }
 }
 
+/// The write options a request's `quantize_output` asks for, checked against its output format
+/// (before any work).
+pub fn write_options(quantize: bool, format: Option<proto::MeshFormat>) -> Result<WriteOptions, Status> {
+    if quantize && format != Some(proto::MeshFormat::Gltf) {
+        return Err(invalid(
+            "quantize_output",
+            "KHR_mesh_quantization is a glTF extension: it needs output_format MESH_FORMAT_GLTF",
+        ));
+    }
+    Ok(WriteOptions { quantize })
+}
+
 /// The mesh as a file in `format` (glTF as GLB), or `None` when no format was asked for.
-pub fn encode_mesh(mesh: &Mesh, format: Option<proto::MeshFormat>) -> Result<Option<proto::EncodedMesh>, Status> {
+pub fn encode_mesh(
+    mesh: &Mesh,
+    format: Option<proto::MeshFormat>,
+    write: &WriteOptions,
+) -> Result<Option<proto::EncodedMesh>, Status> {
     let Some(format) = format else { return Ok(None) };
     let engine_format = match format {
         proto::MeshFormat::Obj => MeshFormat::Obj,
@@ -205,7 +221,12 @@ pub fn encode_mesh(mesh: &Mesh, format: Option<proto::MeshFormat>) -> Result<Opt
         _ => MeshFormat::Gltf,
     };
     let mut data = Vec::new();
-    meshlod_engine::io::write_mesh_to(&mut data, mesh, engine_format).map_err(|e| {
+    let written = if engine_format == MeshFormat::Gltf {
+        meshlod_engine::io::write_gltf_with(&mut data, mesh, true, None, write)
+    } else {
+        meshlod_engine::io::write_mesh_to(&mut data, mesh, engine_format)
+    };
+    written.map_err(|e| {
         invalid("output_format", format!("the result cannot be written as {}: {e}", format.as_str_name()))
     })?;
     Ok(Some(proto::EncodedMesh { data, format: format as i32 }))

@@ -9,7 +9,7 @@ use std::sync::{Arc, OnceLock};
 use anyhow::{Context, Result};
 use meshlod_engine::Mesh;
 use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
-use meshlod_engine::io::{output_format, read_mesh, write_mesh};
+use meshlod_engine::io::{WriteOptions, output_format, read_mesh, write_mesh_with};
 use meshlod_engine::pm::ProgressiveMesh;
 use meshlod_engine::pm_format::{encode, encode_lossless};
 use meshlod_predictor::Predictor;
@@ -24,6 +24,8 @@ pub struct SimplifyJob {
     pub input: PathBuf,
     /// Output mesh (its extension picks the format).
     pub output: PathBuf,
+    /// How the output is written.
+    pub write: WriteOptions,
     /// The options, as the contract has them (`return_progressive` is set from `pm`).
     pub options: proto::SimplifyOptions,
     /// Where to write the progressive mesh, if anywhere.
@@ -37,6 +39,8 @@ pub struct RefineJob {
     pub input: PathBuf,
     /// Output mesh.
     pub output: PathBuf,
+    /// How the output is written.
+    pub write: WriteOptions,
     /// The request, as the contract has it (its `input` is filled in by the executor).
     pub request: proto::RefineRequest,
     /// Measure the output against this mesh.
@@ -71,7 +75,7 @@ pub fn load(path: &Path) -> Result<Mesh> {
 
 /// Checks what a simplify job will write before any work: a mesh format and folders that exist.
 pub fn check_simplify_outputs(job: &SimplifyJob) -> Result<()> {
-    output_format(&job.output)?;
+    job.write.check(output_format(&job.output)?)?;
     if let Some(pm) = &job.pm
         && let Some(parent) = pm.parent().filter(|p| !p.as_os_str().is_empty())
         && !parent.is_dir()
@@ -90,7 +94,7 @@ pub fn finish_simplify(
     stats: &proto::SimplifyStats,
     measured: Option<&proto::HausdorffReport>,
 ) -> Result<Report> {
-    write_mesh(&job.output, mesh)?;
+    write_mesh_with(&job.output, mesh, &job.write)?;
     let mut report = report::simplify(stats, measured);
     add_unwritten_warning(&mut report, &job.output, mesh);
     if let Some(path) = &job.pm {
@@ -112,7 +116,7 @@ fn add_unwritten_warning(report: &mut Report, output: &std::path::Path, mesh: &M
 
 /// The end of every refine job: writes the mesh, measures it against the reference if asked.
 pub fn finish_refine(job: &RefineJob, mesh: &Mesh, stats: &proto::RefineStats) -> Result<Report> {
-    write_mesh(&job.output, mesh)?;
+    write_mesh_with(&job.output, mesh, &job.write)?;
     let mut report = report::refine(stats);
     add_unwritten_warning(&mut report, &job.output, mesh);
     if let Some(reference) = &job.reference {
@@ -176,7 +180,7 @@ impl Executor for Local {
     }
 
     fn refine(&self, job: &RefineJob) -> Result<Report> {
-        output_format(&job.output)?;
+        job.write.check(output_format(&job.output)?)?;
         let mesh = load(&job.input)?;
         let predictor = self.predictor_if(job.request.etc_auto)?;
         let (result, stats) = crate::jobs::refine(&mesh, &job.request, predictor.as_deref(), None, usize::MAX)

@@ -8,6 +8,16 @@
 //! verbatim ([`MaterialLibrary`]); images are embedded in the buffer, so the output draws without
 //! the input's folder. An image whose file cannot be read is kept as a URI relative to the output
 //! (and named in the error when there is no output folder to point from).
+//!
+//! With [`WriteOptions::quantize`] the vertex data is stored as integers under
+//! `KHR_mesh_quantization` (required by the file, so a viewer without it refuses it rather than
+//! drawing garbage), as gltfpack stores it: positions as 16-bit integers on a grid spanning the
+//! mesh's largest side, undone by the node's translation and uniform scale (error at most
+//! √3/2 · side / 65 535 per vertex; a skinned mesh keeps float positions, its node's transform
+//! being ignored by skinning); normals and tangents as normalised 8-bit integers (within half a
+//! degree); texture coordinates in [0, 1] as normalised unsigned 16-bit integers (1/65 535: 0.016
+//! texel of a 1024² texture), in [-1, 1] as signed ones (1/32 767), others as floats (a repeating
+//! texture); colours as normalised 16-bit integers (core glTF).
 
 use std::io::Write;
 use std::path::{Component, Path, PathBuf};
@@ -15,13 +25,17 @@ use std::path::{Component, Path, PathBuf};
 use base64::Engine as _;
 use serde_json::{Value, json};
 
+use super::WriteOptions;
 use crate::mesh::{ImageSource, MaterialLibrary, Mesh, NO_MATERIAL};
 
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+const BYTE: u32 = 5120;
+const SHORT: u32 = 5122;
 const FLOAT: u32 = 5126;
 const UNSIGNED_SHORT: u32 = 5123;
 const UNSIGNED_INT: u32 = 5125;
+const QUANTIZATION: &str = "KHR_mesh_quantization";
 
 /// The binary buffer being assembled, with its bufferViews.
 #[derive(Default)]
@@ -44,6 +58,63 @@ impl Buffer {
         self.views.push(view);
         self.views.len() - 1
     }
+
+    /// [`Buffer::view`] of vertex data whose elements are `stride` bytes apart.
+    fn strided(&mut self, data: &[u8], stride: usize) -> usize {
+        let view = self.view(data, Some(ARRAY_BUFFER));
+        self.views[view]["byteStride"] = json!(stride);
+        view
+    }
+}
+
+/// A vertex attribute as it is stored: its bytes, their component type, whether they are
+/// normalised integers, and the stride between elements where padding makes it more than their
+/// size.
+struct Stored {
+    bytes: Vec<u8>,
+    component: u32,
+    normalized: bool,
+    stride: Option<usize>,
+}
+
+impl Stored {
+    fn floats<const N: usize>(values: impl Iterator<Item = [f32; N]>) -> Stored {
+        Stored { bytes: floats(values), component: FLOAT, normalized: false, stride: None }
+    }
+}
+
+/// `x` in [-1, 1] as a normalised signed byte (glTF: `max(b / 127, -1)`).
+fn snorm8(x: f32) -> u8 {
+    ((x.clamp(-1.0, 1.0) * 127.0).round() as i8) as u8
+}
+
+/// `x` in [-1, 1] as a normalised signed short (glTF: `max(s / 32767, -1)`).
+fn snorm16(x: f32) -> [u8; 2] {
+    ((x.clamp(-1.0, 1.0) * 32767.0).round() as i16).to_le_bytes()
+}
+
+/// `x` in [0, 1] as a normalised unsigned short (`s / 65535`).
+fn unorm16(x: f32) -> [u8; 2] {
+    ((x.clamp(0.0, 1.0) * 65535.0).round() as u16).to_le_bytes()
+}
+
+/// The positions on a 16-bit grid: the integers (with each element padded to 8 bytes), their
+/// per-component minimum and maximum, and the grid's origin and step.
+fn quantized_positions(positions: &[[f32; 3]], min: [f32; 3], max: [f32; 3]) -> (Vec<u8>, [u16; 3], [u16; 3], f32) {
+    let side = (0..3).map(|k| max[k] - min[k]).fold(0.0f32, f32::max);
+    let step = if side > 0.0 { side / 65535.0 } else { 1.0 };
+    let (mut qmin, mut qmax) = ([u16::MAX; 3], [0u16; 3]);
+    let mut bytes = Vec::with_capacity(8 * positions.len());
+    for p in positions {
+        for k in 0..3 {
+            let q = ((p[k] - min[k]) / step).round().clamp(0.0, 65535.0) as u16;
+            qmin[k] = qmin[k].min(q);
+            qmax[k] = qmax[k].max(q);
+            bytes.extend_from_slice(&q.to_le_bytes());
+        }
+        bytes.extend_from_slice(&[0, 0]);
+    }
+    (bytes, qmin, qmax, step)
 }
 
 fn floats<const N: usize>(values: impl Iterator<Item = [f32; N]>) -> Vec<u8> {
@@ -52,8 +123,26 @@ fn floats<const N: usize>(values: impl Iterator<Item = [f32; N]>) -> Vec<u8> {
 
 /// Writes `mesh` as glTF: GLB when `binary`, else JSON with a data-URI buffer. `folder`: where the
 /// output goes, to point at images that cannot be embedded.
-pub fn write_gltf(mut out: impl Write, mesh: &Mesh, binary: bool, folder: Option<&Path>) -> std::io::Result<()> {
+pub fn write_gltf(out: impl Write, mesh: &Mesh, binary: bool, folder: Option<&Path>) -> std::io::Result<()> {
+    write_gltf_with(out, mesh, binary, folder, &WriteOptions::default())
+}
+
+/// [`write_gltf`] with the [`WriteOptions`] (quantized vertex data, see the module documentation).
+pub fn write_gltf_with(
+    mut out: impl Write,
+    mesh: &Mesh,
+    binary: bool,
+    folder: Option<&Path>,
+    options: &WriteOptions,
+) -> std::io::Result<()> {
     let corners = &mesh.corners;
+    let quantize = options.quantize;
+    let rig = corners.library.as_ref().and_then(|l| l.rig.as_ref()).filter(|_| corners.joints.is_some());
+    // Whether an accessor uses the extension's integer types (a mesh with nothing to quantize
+    // does not need it).
+    let mut quantized = false;
+    // The transform that undoes the positions' grid, on the mesh's node: (origin, step).
+    let mut grid = None;
     let wedges = corners.wedges(&mesh.triangles, mesh.vertex_count());
     let count = wedges.source.len();
     let vertex = |i: usize| wedges.vertex(&mesh.triangles, i);
@@ -70,21 +159,50 @@ pub fn write_gltf(mut out: impl Write, mesh: &Mesh, binary: bool, folder: Option
             max[k] = max[k].max(p[k]);
         }
     }
-    let view = buffer.view(&floats(positions.into_iter()), Some(ARRAY_BUFFER));
-    let mut position = json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC3" });
-    if count > 0 {
-        position["min"] = json!(min);
-        position["max"] = json!(max);
-    }
+    let position = if quantize && rig.is_none() && count > 0 {
+        let (bytes, qmin, qmax, step) = quantized_positions(&positions, min, max);
+        quantized = true;
+        grid = Some((min, step));
+        let view = buffer.strided(&bytes, 8);
+        json!({ "bufferView": view, "componentType": UNSIGNED_SHORT, "count": count, "type": "VEC3",
+                "min": qmin, "max": qmax })
+    } else {
+        let view = buffer.view(&floats(positions.into_iter()), Some(ARRAY_BUFFER));
+        let mut position = json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC3" });
+        if count > 0 {
+            position["min"] = json!(min);
+            position["max"] = json!(max);
+        }
+        position
+    };
     accessors.push(position);
     attributes.insert("POSITION".into(), json!(accessors.len() - 1));
 
     // A corner's values (wedges come from corners unless there are no attributes at all).
+    let mut add = |name: &str, kind: &str, stored: Stored| {
+        let view = buffer.view(&stored.bytes, Some(ARRAY_BUFFER));
+        let mut accessor =
+            json!({ "bufferView": view, "componentType": stored.component, "count": count, "type": kind });
+        if let Some(stride) = stored.stride {
+            buffer.views[view]["byteStride"] = json!(stride);
+        }
+        if stored.normalized {
+            accessor["normalized"] = json!(true);
+        }
+        accessors.push(accessor);
+        attributes.insert(name.into(), json!(accessors.len() - 1));
+    };
     if let Some(normals) = &corners.normals {
         let values = (0..count).map(|i| unit(normals[wedges.source[i]]));
-        let view = buffer.view(&floats(values), Some(ARRAY_BUFFER));
-        accessors.push(json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC3" }));
-        attributes.insert("NORMAL".into(), json!(accessors.len() - 1));
+        let stored = if quantize {
+            quantized = true;
+            // Each element padded to 4 bytes, as glTF aligns vertex attributes.
+            let bytes = values.flat_map(|n| [snorm8(n[0]), snorm8(n[1]), snorm8(n[2]), 0]).collect();
+            Stored { bytes, component: BYTE, normalized: true, stride: Some(4) }
+        } else {
+            Stored::floats(values)
+        };
+        add("NORMAL", "VEC3", stored);
     }
     if let Some(tangents) = &corners.tangents {
         let values = (0..count).map(|i| {
@@ -92,35 +210,51 @@ pub fn write_gltf(mut out: impl Write, mesh: &Mesh, binary: bool, folder: Option
             let [x, y, z] = unit([t[0], t[1], t[2]]);
             [x, y, z, if t[3] < 0.0 { -1.0 } else { 1.0 }]
         });
-        let view = buffer.view(&floats(values), Some(ARRAY_BUFFER));
-        accessors.push(json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC4" }));
-        attributes.insert("TANGENT".into(), json!(accessors.len() - 1));
+        let stored = if quantize {
+            quantized = true;
+            Stored {
+                bytes: values.flat_map(|t| t.map(snorm8)).collect(),
+                component: BYTE,
+                normalized: true,
+                stride: None,
+            }
+        } else {
+            Stored::floats(values)
+        };
+        add("TANGENT", "VEC4", stored);
     }
-    if let Some(uvs) = corners.uvs_with_origin(true) {
-        let view = buffer.view(&floats((0..count).map(|i| uvs[wedges.source[i]])), Some(ARRAY_BUFFER));
-        accessors.push(json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC2" }));
-        attributes.insert("TEXCOORD_0".into(), json!(accessors.len() - 1));
-    }
-    if let Some(uvs) = corners.uvs1_with_origin(true) {
-        let view = buffer.view(&floats((0..count).map(|i| uvs[wedges.source[i]])), Some(ARRAY_BUFFER));
-        accessors.push(json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC2" }));
-        attributes.insert("TEXCOORD_1".into(), json!(accessors.len() - 1));
+    for (name, uvs) in [("TEXCOORD_0", corners.uvs_with_origin(true)), ("TEXCOORD_1", corners.uvs1_with_origin(true))] {
+        let Some(uvs) = uvs else { continue };
+        let values = || (0..count).map(|i| uvs[wedges.source[i]]);
+        // Normalised integers hold [0, 1] (unsigned) or [-1, 1] (signed, at half the precision):
+        // a repeating texture's coordinates stay float.
+        let within = |range: std::ops::RangeInclusive<f32>| values().flatten().all(|c| range.contains(&c));
+        let integers = |component: u32, encode: fn(f32) -> [u8; 2]| {
+            let bytes = values().flatten().flat_map(encode).collect();
+            Stored { bytes, component, normalized: true, stride: None }
+        };
+        let stored = match quantize {
+            true if within(0.0..=1.0) => integers(UNSIGNED_SHORT, unorm16),
+            true if within(-1.0..=1.0) => integers(SHORT, snorm16),
+            _ => Stored::floats(values()),
+        };
+        quantized |= stored.component != FLOAT;
+        add(name, "VEC2", stored);
     }
     if let Some(colors) = &corners.colors {
         let values = (0..count).map(|i| colors[wedges.source[i]].map(|c| c.clamp(0.0, 1.0)));
-        let view = buffer.view(&floats(values), Some(ARRAY_BUFFER));
-        accessors.push(json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC4" }));
-        attributes.insert("COLOR_0".into(), json!(accessors.len() - 1));
+        let stored = if quantize {
+            let bytes = values.flat_map(|c| c.map(unorm16)).flatten().collect();
+            Stored { bytes, component: UNSIGNED_SHORT, normalized: true, stride: None }
+        } else {
+            Stored::floats(values)
+        };
+        add("COLOR_0", "VEC4", stored);
     }
     if let (Some(joints), Some(weights)) = (&corners.joints, &corners.weights) {
-        let bytes: Vec<u8> =
-            (0..count).flat_map(|i| joints[wedges.source[i]].into_iter().flat_map(u16::to_le_bytes)).collect();
-        let view = buffer.view(&bytes, Some(ARRAY_BUFFER));
-        accessors.push(json!({ "bufferView": view, "componentType": UNSIGNED_SHORT, "count": count, "type": "VEC4" }));
-        attributes.insert("JOINTS_0".into(), json!(accessors.len() - 1));
-        let view = buffer.view(&floats((0..count).map(|i| weights[wedges.source[i]])), Some(ARRAY_BUFFER));
-        accessors.push(json!({ "bufferView": view, "componentType": FLOAT, "count": count, "type": "VEC4" }));
-        attributes.insert("WEIGHTS_0".into(), json!(accessors.len() - 1));
+        let bytes = (0..count).flat_map(|i| joints[wedges.source[i]].into_iter().flat_map(u16::to_le_bytes)).collect();
+        add("JOINTS_0", "VEC4", Stored { bytes, component: UNSIGNED_SHORT, normalized: false, stride: None });
+        add("WEIGHTS_0", "VEC4", Stored::floats((0..count).map(|i| weights[wedges.source[i]])));
     }
 
     // One primitive per material, in the order materials first appear; indices in one view.
@@ -177,16 +311,27 @@ pub fn write_gltf(mut out: impl Write, mesh: &Mesh, binary: bool, folder: Option
         "nodes": [{ "mesh": 0 }],
         "meshes": [{ "primitives": primitives }],
     });
+    if let Some((origin, step)) = grid {
+        document["nodes"][0]["translation"] = json!(origin);
+        document["nodes"][0]["scale"] = json!([step, step, step]);
+    }
     // A skinned mesh is drawn where its input was, by the node with the skin, in the input's
     // hierarchy, with the input's animations (skin joints only without one: the joints have no
     // skin to refer to, and a mesh without them is the input's bind pose).
-    let rig = corners.library.as_ref().and_then(|l| l.rig.as_ref()).filter(|_| corners.joints.is_some());
     if let Some(rig) = rig {
         add_rig(&mut document, rig, &mut accessors, &mut buffer);
     }
     document["accessors"] = json!(accessors);
     if let Some(library) = &corners.library {
         add_library(&mut document, library, &mut buffer, folder)?;
+    }
+    if quantized {
+        for key in ["extensionsUsed", "extensionsRequired"] {
+            let list = document[key].as_array().cloned().unwrap_or_default();
+            if !list.iter().any(|e| e == QUANTIZATION) {
+                document[key] = json!(list.into_iter().chain([json!(QUANTIZATION)]).collect::<Vec<_>>());
+            }
+        }
     }
     document["bufferViews"] = json!(buffer.views);
     let length = buffer.bytes.len();

@@ -25,7 +25,7 @@ use crate::error::MeshError;
 use crate::mesh::Mesh;
 
 pub use gltf::read_gltf;
-pub use gltf_write::write_gltf;
+pub use gltf_write::{write_gltf, write_gltf_with};
 pub use obj::{read_obj, write_obj};
 pub use off::read_off;
 pub use ply::{read_ply, write_ply};
@@ -228,16 +228,46 @@ pub fn output_format(path: impl AsRef<Path>) -> Result<MeshFormat, MeshError> {
     Ok(format)
 }
 
+/// How a mesh file is written.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct WriteOptions {
+    /// glTF only: the vertex data as integers under `KHR_mesh_quantization` (positions on a 16-bit
+    /// grid, normals and tangents in 8 bits, texture coordinates and colours in 16;
+    /// [`write_gltf_with`]), about half the bytes per vertex.
+    pub quantize: bool,
+}
+
+impl WriteOptions {
+    /// Checks the options against the output's format before any work is done.
+    pub fn check(&self, format: MeshFormat) -> Result<(), MeshError> {
+        if self.quantize && format != MeshFormat::Gltf {
+            return Err(MeshError::InvalidParameter {
+                name: "quantize",
+                reason: format!(
+                    "KHR_mesh_quantization is a glTF extension: {format:?} output has no place for it; write .glb or .gltf"
+                ),
+            });
+        }
+        Ok(())
+    }
+}
+
 /// Writes a mesh to a file whose extension (`.obj`, `.ply`, `.gltf`, `.glb`) picks the format.
 pub fn write_mesh(path: impl AsRef<Path>, mesh: &Mesh) -> Result<(), MeshError> {
+    write_mesh_with(path, mesh, &WriteOptions::default())
+}
+
+/// [`write_mesh`] with the [`WriteOptions`].
+pub fn write_mesh_with(path: impl AsRef<Path>, mesh: &Mesh, options: &WriteOptions) -> Result<(), MeshError> {
     let path = path.as_ref();
     let format = output_format(path)?;
+    options.check(format)?;
     let file = std::fs::File::create(path).map_err(|e| io_error(path, e))?;
     let mut writer = std::io::BufWriter::new(file);
     if format == MeshFormat::Gltf {
         let binary = !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gltf"));
         let folder = path.parent().map(|p| if p.as_os_str().is_empty() { Path::new(".") } else { p });
-        write_gltf(&mut writer, mesh, binary, folder).map_err(|e| io_error(path, e))?;
+        write_gltf_with(&mut writer, mesh, binary, folder, options).map_err(|e| io_error(path, e))?;
     } else {
         write_mesh_to(&mut writer, mesh, format).map_err(|e| io_error(path, e))?;
     }

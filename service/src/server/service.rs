@@ -107,11 +107,12 @@ impl MeshLodService {
         let predictor = self.config.predictor.clone();
         move |cancel| {
             let format = convert::output_format(request.output_format, "output_format")?;
+            let write = convert::write_options(request.quantize_output, format)?;
             let mesh = mesh_from_input(request.input.as_ref(), "input", &limits, Some(cancel.clone()))?;
             let mut options = request.options.unwrap_or_default();
             options.return_progressive |= progressive;
             let mut run = jobs::simplify(&mesh, &options, predictor.as_deref(), Some(cancel))?;
-            run.encoded = convert::encode_mesh(&run.result.mesh, format)?;
+            run.encoded = convert::encode_mesh(&run.result.mesh, format, &write)?;
             Ok(run)
         }
     }
@@ -261,10 +262,11 @@ impl MeshLod for MeshLodService {
         let response = self
             .run("Refine", deadline, move |cancel| {
                 let format = convert::output_format(request.output_format, "output_format")?;
+                let write = convert::write_options(request.quantize_output, format)?;
                 let mesh = mesh_from_input(request.input.as_ref(), "input", &limits, Some(cancel.clone()))?;
                 let (result, stats) =
                     jobs::refine(&mesh, &request, predictor.as_deref(), Some(cancel), limits.max_faces)?;
-                let encoded = convert::encode_mesh(&result.mesh, format)?;
+                let encoded = convert::encode_mesh(&result.mesh, format, &write)?;
                 Ok(proto::RefineResponse {
                     mesh: encoded.is_none().then(|| mesh_to_proto(&result.mesh)),
                     stats: Some(stats),
