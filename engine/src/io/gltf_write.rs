@@ -180,12 +180,12 @@ pub fn write_gltf_with(
 
     // A corner's values (wedges come from corners unless there are no attributes at all).
     let mut add = |name: &str, kind: &str, stored: Stored| {
-        let view = buffer.view(&stored.bytes, Some(ARRAY_BUFFER));
+        let view = match stored.stride {
+            Some(stride) => buffer.strided(&stored.bytes, stride),
+            None => buffer.view(&stored.bytes, Some(ARRAY_BUFFER)),
+        };
         let mut accessor =
             json!({ "bufferView": view, "componentType": stored.component, "count": count, "type": kind });
-        if let Some(stride) = stored.stride {
-            buffer.views[view]["byteStride"] = json!(stride);
-        }
         if stored.normalized {
             accessor["normalized"] = json!(true);
         }

@@ -91,11 +91,10 @@ impl Retry {
             }
         }
         self.marked = log.len();
-        // The latest refusal of each edge, sorted by edge for the lookups.
-        self.refusals.sort_unstable();
-        self.refusals.reverse();
+        // The latest refusal of each edge (first among its own once sorted), by edge for the
+        // lookups.
+        self.refusals.sort_unstable_by(|x, y| x.0.cmp(&y.0).then(y.1.cmp(&x.1)));
         self.refusals.dedup_by_key(|r| r.0);
-        self.refusals.reverse();
     }
 
     /// Whether edge {a, b} may have become legal since it was last refused (always, if it never
