@@ -343,6 +343,25 @@ fn simplification_keeps_the_textured_assets_attributes_and_seams() {
     }
 }
 
+#[test]
+fn anchors_that_lose_a_set_of_values_let_a_skinned_asset_reach_its_target() {
+    use meshlod_engine::simplify::{SimplifyOptions, simplify};
+    let Some(dir) = meshlod_engine::datasets::require_shared_textured("anchors_released") else { return };
+    // CesiumMan's skin gives many vertices three or more sets of values; collapses around them take
+    // some sets away, and the passes after the first let those vertices move again (it stopped at
+    // 578 faces for 467 before they did).
+    let path = dir.join("draco__CesiumMan/CesiumMan.gltf");
+    let mesh = read_mesh(&path).unwrap();
+    let out = simplify(&mesh, &SimplifyOptions { target_ratio: Some(0.9), ..Default::default() }).unwrap();
+    assert!(
+        out.mesh.face_count() <= out.stats.target_faces,
+        "{} faces for {}",
+        out.mesh.face_count(),
+        out.stats.target_faces
+    );
+    assert_eq!(out.mesh.corners.names(), mesh.corners.names());
+}
+
 /// The attribute values of corner `k`, as bits.
 fn corner_key(mesh: &Mesh, k: usize) -> Vec<u32> {
     let c = &mesh.corners;
