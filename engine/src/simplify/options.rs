@@ -413,11 +413,3 @@ pub(crate) enum Refusal {
     /// Rule 7: a texture-space triangle would flip or lose its area.
     UvFlip,
 }
-
-impl Refusal {
-    /// Whether another survivor or placement of the same edge could pass where this one did not
-    /// (the link condition and the face count are the edge's own).
-    pub(crate) fn depends_on_placement(self) -> bool {
-        !matches!(self, Refusal::Link | Refusal::TooFewFaces)
-    }
-}

@@ -3,11 +3,9 @@
 //! the metric's cost.
 
 use glam::DVec3;
-use smallvec::SmallVec;
 
 use super::classify::VertexKind;
-use super::cost::Candidate;
-use super::kernel::{State, to_f32, to_f64};
+use super::kernel::{State, to_f64};
 use super::options::{BoundaryMode, Metric, Placement};
 
 /// Which endpoint of an edge survives its collapse.
@@ -36,7 +34,43 @@ impl State<'_> {
     pub(super) fn choose(&self, a: u32, b: u32) -> Option<Choice> {
         let (va, vb) = (&self.vertices[a as usize], &self.vertices[b as usize]);
         let (ka, kb) = (va.kind, vb.kind);
-        let (may_keep_a, may_keep_b, may_move) = self.roles(a, b)?;
+        let lock = self.options.boundary == BoundaryMode::Lock;
+        // A frozen vertex stays where it is, as an anchor does, and takes in a neighbour only
+        // where its own edges to the collapse's opposite vertices are manifold (rule 1, checked
+        // with the link condition in `is_legal`).
+        let stays = |k: VertexKind| matches!(k, VertexKind::Anchored | VertexKind::Frozen);
+        // Which endpoints may survive, and whether the survivor may move.
+        let (may_keep_a, may_keep_b, may_move) = match (ka, kb) {
+            _ if stays(ka) && stays(kb) => return None,
+            // A boundary vertex goes into an anchor only along its boundary.
+            (_, VertexKind::Boundary) | (VertexKind::Boundary, _)
+                if (stays(ka) || stays(kb)) && self.edge_corners(a, b).1 != 1 =>
+            {
+                return None;
+            }
+            _ if stays(ka) => (true, false, false),
+            _ if stays(kb) => (false, true, false),
+            (VertexKind::Boundary, VertexKind::Boundary) => {
+                if lock || self.edge_corners(a, b).1 != 1 {
+                    return None; // interior edge joining two boundary points, or locked border
+                }
+                (true, true, true)
+            }
+            (VertexKind::Boundary, _) => (true, false, false),
+            (_, VertexKind::Boundary) => (false, true, false),
+            _ => (true, true, true),
+        };
+        // With attributes, an edge with one end on a seam keeps that end where it is (rule 7).
+        let (may_keep_a, may_keep_b, may_move) = if self.on_seam.is_empty() {
+            (may_keep_a, may_keep_b, may_move)
+        } else {
+            match (self.on_seam[a as usize], self.on_seam[b as usize]) {
+                (true, false) if may_keep_a => (true, false, false),
+                (false, true) if may_keep_b => (false, true, false),
+                (true, false) | (false, true) => return None,
+                _ => (may_keep_a, may_keep_b, may_move),
+            }
+        };
         let (pa, pb) = (to_f64(va.position), to_f64(vb.position));
         let mut best: Option<Choice> = None;
         // Keeps the choice with the lower (cost, error); the first one considered wins a tie.
@@ -117,96 +151,5 @@ impl State<'_> {
             }
         }
         best
-    }
-
-    /// Which endpoints of edge {a, b} may survive its collapse, and whether the survivor may move
-    /// (`None`: neither may, by the rules that need no geometry).
-    #[inline(always)]
-    fn roles(&self, a: u32, b: u32) -> Option<(bool, bool, bool)> {
-        let (ka, kb) = (self.vertices[a as usize].kind, self.vertices[b as usize].kind);
-        let lock = self.options.boundary == BoundaryMode::Lock;
-        // A frozen vertex stays where it is, as an anchor does, and takes in a neighbour only
-        // where its own edges to the collapse's opposite vertices are manifold (rule 1, checked
-        // with the link condition in `is_legal`).
-        let stays = |k: VertexKind| matches!(k, VertexKind::Anchored | VertexKind::Frozen);
-        // Which endpoints may survive, and whether the survivor may move.
-        let (may_keep_a, may_keep_b, may_move) = match (ka, kb) {
-            _ if stays(ka) && stays(kb) => return None,
-            // A boundary vertex goes into an anchor only along its boundary.
-            (_, VertexKind::Boundary) | (VertexKind::Boundary, _)
-                if (stays(ka) || stays(kb)) && self.edge_corners(a, b).1 != 1 =>
-            {
-                return None;
-            }
-            _ if stays(ka) => (true, false, false),
-            _ if stays(kb) => (false, true, false),
-            (VertexKind::Boundary, VertexKind::Boundary) => {
-                if lock || self.edge_corners(a, b).1 != 1 {
-                    return None; // interior edge joining two boundary points, or locked border
-                }
-                (true, true, true)
-            }
-            (VertexKind::Boundary, _) => (true, false, false),
-            (_, VertexKind::Boundary) => (false, true, false),
-            _ => (true, true, true),
-        };
-        // With attributes, an edge with one end on a seam keeps that end where it is (rule 7).
-        if self.on_seam.is_empty() {
-            return Some((may_keep_a, may_keep_b, may_move));
-        }
-        match (self.on_seam[a as usize], self.on_seam[b as usize]) {
-            (true, false) if may_keep_a => Some((true, false, false)),
-            (false, true) if may_keep_b => Some((false, true, false)),
-            (true, false) | (false, true) => None,
-            _ => Some((may_keep_a, may_keep_b, may_move)),
-        }
-    }
-
-    /// The other collapses of edge {a, b} than `refused` (its survivor kept where it is or moved
-    /// to the midpoint, each endpoint that may survive), cheapest first: what a pass after the
-    /// first tries when the preferred one is refused for its geometry or its attributes
-    /// ([`super::run`]).
-    pub(super) fn fallbacks(&self, a: u32, b: u32, refused: &Candidate) -> SmallVec<[Choice; 3]> {
-        let mut out: SmallVec<[Choice; 3]> = SmallVec::new();
-        let Some((may_keep_a, may_keep_b, may_move)) = self.roles(a, b) else { return out };
-        let (va, vb) = (&self.vertices[a as usize], &self.vertices[b as usize]);
-        let (pa, pb) = (to_f64(va.position), to_f64(vb.position));
-        let q = va.quadric + vb.quadric;
-        let factor = self.normal_factor(va, vb);
-        let weighted = self.wedges.is_some();
-        let melax = self.options.metric == Metric::Melax;
-        let cost = |survivor: u32, p: DVec3| {
-            let removed = survivor ^ a ^ b;
-            if melax {
-                return (self.melax_cost(removed, survivor), q.error(p));
-            }
-            let appearance = if weighted { self.attribute_error(survivor, removed, p) } else { 0.0 };
-            ((q.error(p) + appearance) * factor, q.error(p))
-        };
-        let is_refused = |survivor: u32, p: DVec3| survivor == refused.survivor && to_f32(p) == refused.position;
-        let mut offer = |keep: Keep, survivor: u32, p: DVec3| {
-            if !is_refused(survivor, p) {
-                let (cost, error) = cost(survivor, p);
-                out.push(Choice { cost, error, keep, position: p });
-            }
-        };
-        if may_keep_a {
-            offer(Keep::A, a, pa);
-        }
-        if may_keep_b {
-            offer(Keep::B, b, pb);
-        }
-        if may_move && self.options.placement != Placement::Endpoint && !melax {
-            let keep = if may_keep_a && !may_keep_b {
-                Keep::A
-            } else if may_keep_b && !may_keep_a {
-                Keep::B
-            } else {
-                Keep::Larger
-            };
-            offer(keep, self.survivor(keep, a, b), (pa + pb) * 0.5);
-        }
-        out.sort_by(|x, y| (x.cost, x.error).partial_cmp(&(y.cost, y.error)).unwrap_or(std::cmp::Ordering::Equal));
-        out
     }
 }

@@ -7,7 +7,9 @@
 //! in refusals (a textured asset whose seams stop it above its target) the passes after the first
 //! cost a quarter of the run; on Fox this leaves out about half of each later pass's edges (the
 //! rest are near the few collapses those passes still find), 4% of its time
-//! (docs/attributes-report.md).
+//! (docs/attributes-report.md). The one other change a pass can see is in a vertex's kind: an
+//! anchor whose faces lost all but two sets of values is released when a pass begins
+//! ([`State::release_anchors`]), and every edge of a released vertex is queued again.
 //!
 //! Collapses only merge vertices, so a vertex within two edges of a survivor when it took its
 //! collapse is within two edges of that survivor (or of the vertex it later went into) when the

@@ -65,9 +65,6 @@ pub(super) fn run(
     let mut refused = Refusals::default();
     let mut retry = Retry::default();
     let mut released: Vec<bool> = Vec::new();
-    // Passes after the first try more with per-corner attributes only: their seams and anchors
-    // stop those runs above the target most often, and positions-only runs keep their results.
-    let with_attributes = !state.corner_source.is_empty();
     let mut pops = 0usize;
     let mut passes = 1;
     let mut collapses_this_pass = 0;
@@ -96,11 +93,9 @@ pub(super) fn run(
             // that a collapse came near after its last refusal (`retry`).
             passes += 1;
             collapses_this_pass = 0;
-            released.resize(vertex_count, false);
             retry.prepare(state, &log);
-            // With attributes the second pass is the first to try fallbacks: every edge refused so
-            // far gets it. Anchors that lost a set of values may move from now on: their edges, too.
-            let every = passes == 2 && with_attributes;
+            // Anchors that lost a set of values may move from now on: their edges, too.
+            released.resize(vertex_count, false);
             released.fill(false);
             for v in state.release_anchors() {
                 released[v as usize] = true;
@@ -108,7 +103,7 @@ pub(super) fn run(
             for v in 0..vertex_count as u32 {
                 if state.vertex_alive[v as usize] {
                     neighbours.clear();
-                    let again = |u: u32| every || released[v as usize] || released[u as usize] || retry.needs(v, u);
+                    let again = |u: u32| released[v as usize] || released[u as usize] || retry.needs(v, u);
                     state.push_edges_where(v, v + 1, &mut heap, &mut neighbours, again);
                 }
             }
@@ -152,34 +147,21 @@ pub(super) fn run(
         {
             break StopReason::MaxErrorReached;
         }
-        let (legal, error_paper) = match state.is_legal(&candidate) {
-            Ok(legal) => (legal, error_paper),
+        let legal = match state.is_legal(&candidate) {
+            Ok(legal) => legal,
             Err(refusal) => {
                 refused.count(refusal);
-                // With attributes, in a pass after the first, the preferred collapse was refused
-                // before: the edge's other placements and survivors get their turn, cheapest first.
-                let fallback = if passes > 1 && with_attributes && refusal.depends_on_placement() {
-                    state.legal_fallback(a, b, &candidate, units, options.max_error)
-                } else {
-                    None
-                };
-                match fallback {
-                    Some(found) => found,
-                    None => {
-                        retry.refused(a, b, log.len());
-                        continue;
-                    }
-                }
+                retry.refused(a, b, log.len());
+                continue;
             }
         };
-        let survivor = legal.candidate().survivor;
         let mut record = state.collapse(legal);
         max_collapse_error = max_collapse_error.max(error_paper);
         record.error = max_collapse_error as f32;
         faces_alive -= (record.left_face != NONE) as usize + (record.right_face != NONE) as usize;
         log.push(record);
         collapses_this_pass += 1;
-        state.push_edges_of(survivor, &mut heap, &mut neighbours);
+        state.push_edges_of(candidate.survivor, &mut heap, &mut neighbours);
         // The queue's refills drop the stale entries they pass over; where its heap takes most
         // pushes (refills then come seldom: fandisk's planar regions) they pile up instead. A mesh
         // has about 1.5 edges per face, so once the queue holds more than 2 entries per face a
@@ -189,78 +171,4 @@ pub(super) fn run(
         }
     };
     Ok(Run { log, stop_reason, refused, max_collapse_error })
-}
-
-impl State<'_> {
-    /// The first of edge {a, b}'s [`State::fallbacks`] (other than `refused`) that passes
-    /// [`State::is_legal`] within the error limit, with its error in paper units.
-    fn legal_fallback(
-        &mut self,
-        a: u32,
-        b: u32,
-        refused: &crate::simplify::cost::Candidate,
-        units: &DistanceUnits,
-        max_error: Option<f64>,
-    ) -> Option<(super::legality::Legal, f64)> {
-        let merged = self.vertices[a as usize].quadric + self.vertices[b as usize].quadric;
-        for choice in self.fallbacks(a, b, refused) {
-            let candidate = self.candidate(a, b, choice);
-            let error_paper = units.to_paper(merged.distance(to_f64(candidate.position)));
-            if max_error.is_some_and(|limit| error_paper > limit) {
-                continue;
-            }
-            if let Ok(legal) = self.is_legal(&candidate) {
-                return Some((legal, error_paper));
-            }
-        }
-        None
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::super::SimplifyOptions;
-    use super::super::kernel::State;
-    use crate::mesh::DistanceUnits;
-
-    #[test]
-    fn a_fallback_is_the_cheapest_other_collapse_of_the_edge_that_passes() {
-        // A bumpy sphere with a tight normal limit: many preferred collapses are refused for
-        // their geometry, and some edges have another survivor or placement that passes.
-        let mesh = crate::procedural::bumpy_blob(16, 24, 7);
-        let options = SimplifyOptions { max_normal_change_degrees: 12.0, ..SimplifyOptions::default() };
-        let (mut state, edges) = State::new(&mesh, &options);
-        let units = DistanceUnits::new(&mesh.bounds().unwrap());
-        let (mut refused, mut found) = (0, 0);
-        for [a, b] in edges {
-            let Some(candidate) = state.evaluate(a, b) else { continue };
-            let Err(refusal) = state.is_legal(&candidate) else { continue };
-            if !refusal.depends_on_placement() {
-                continue;
-            }
-            refused += 1;
-            let others = state.fallbacks(a, b, &candidate);
-            assert!(others.windows(2).all(|w| (w[0].cost, w[0].error) <= (w[1].cost, w[1].error)), "cheapest first");
-            let alternatives: Vec<_> = others.iter().map(|&c| state.candidate(a, b, c)).collect();
-            let first_legal = alternatives.into_iter().find(|c| state.is_legal(c).is_ok());
-            let fallback = state.legal_fallback(a, b, &candidate, &units, None);
-            match (fallback, first_legal) {
-                (Some((legal, error)), Some(expected)) => {
-                    let got = legal.candidate();
-                    assert_eq!((got.survivor, got.position), (expected.survivor, expected.position));
-                    assert!(
-                        (got.survivor, got.position) != (candidate.survivor, candidate.position),
-                        "the refused collapse is not offered again"
-                    );
-                    assert!(error.is_finite() && error >= 0.0);
-                    found += 1;
-                }
-                (None, None) => {}
-                (got, expected) => panic!("edge {a}-{b}: fallback {:?}, first legal {expected:?}", got.map(|g| g.1)),
-            }
-            // An error limit below every alternative's error leaves none.
-            assert!(state.legal_fallback(a, b, &candidate, &units, Some(-1.0)).is_none());
-        }
-        assert!(refused > 20 && found > 0, "{refused} refused, {found} with a fallback");
-    }
 }
