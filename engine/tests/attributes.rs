@@ -344,12 +344,13 @@ fn simplification_keeps_the_textured_assets_attributes_and_seams() {
 }
 
 #[test]
-fn anchors_that_lose_a_set_of_values_let_a_skinned_asset_reach_its_target() {
+fn anchors_left_on_a_hard_edge_move_again_so_a_skinned_asset_reaches_its_target() {
     use meshlod_engine::simplify::{SimplifyOptions, simplify};
     let Some(dir) = meshlod_engine::datasets::require_shared_textured("anchors_released") else { return };
-    // CesiumMan's skin gives many vertices three or more sets of values; collapses around them take
-    // some sets away, and the passes after the first let those vertices move again (it stopped at
-    // 578 faces for 467 before they did).
+    // CesiumMan's hard edges meet its texture seams at many vertices where three or more sets of
+    // values meet (anchors); collapses around them take some sets away, and an anchor left with
+    // two that differ in normals only moves along its edge again (it stopped at 578 faces for 467
+    // while anchors stayed anchors).
     let path = dir.join("draco__CesiumMan/CesiumMan.gltf");
     let mesh = read_mesh(&path).unwrap();
     let out = simplify(&mesh, &SimplifyOptions { target_ratio: Some(0.9), ..Default::default() }).unwrap();

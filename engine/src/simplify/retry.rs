@@ -7,9 +7,7 @@
 //! in refusals (a textured asset whose seams stop it above its target) the passes after the first
 //! cost a quarter of the run; on Fox this leaves out about half of each later pass's edges (the
 //! rest are near the few collapses those passes still find), 4% of its time
-//! (docs/attributes-report.md). The one other change a pass can see is in a vertex's kind: an
-//! anchor whose faces lost all but two sets of values is released when a pass begins
-//! ([`State::release_anchors`]), and every edge of a released vertex is queued again.
+//! (docs/attributes-report.md).
 //!
 //! Collapses only merge vertices, so a vertex within two edges of a survivor when it took its
 //! collapse is within two edges of that survivor (or of the vertex it later went into) when the
@@ -18,9 +16,7 @@
 
 use crate::pm::CollapseRecord;
 
-use super::classify::VertexKind;
 use super::kernel::{NONE, State};
-use super::options::BoundaryMode;
 
 /// Refusals and the collapses near each vertex, kept for the passes after the first.
 #[derive(Default)]
@@ -112,47 +108,11 @@ impl Retry {
     }
 }
 
-impl State<'_> {
-    /// Anchors whose faces now carry at most two sets of values: made ordinary vertices again
-    /// (interior or boundary, as their fan is closed or not), still on their seam, and returned.
-    /// A vertex is anchored where three or more sets of values meet at the start; collapses into
-    /// it take faces away, and with them, at times, every corner of a set. Called when a pass
-    /// after the first begins (the first keeps the order it always had). Not with locked borders
-    /// or seams, whose anchors stay whatever their corners.
-    pub(super) fn release_anchors(&mut self) -> Vec<u32> {
-        if self.corner_source.is_empty() || self.options.boundary == BoundaryMode::Lock || self.options.lock_seams {
-            return Vec::new();
-        }
-        let mut released = Vec::new();
-        for v in 0..self.vertices.len() as u32 {
-            if !self.vertex_alive[v as usize] || self.vertices[v as usize].kind != VertexKind::Anchored {
-                continue;
-            }
-            let fan = &self.fans[v as usize];
-            let mut sets = [NONE; 3];
-            for corner in fan {
-                let value = self.value_id[self.source_at(corner.face, v) as usize];
-                if let Some(slot) = sets.iter_mut().find(|s| **s == NONE || **s == value) {
-                    *slot = value;
-                }
-            }
-            if sets[2] != NONE {
-                continue;
-            }
-            let closed = fan.iter().all(|c| fan.iter().any(|d| d.prev == c.next));
-            self.vertices[v as usize].kind = if closed { VertexKind::Interior } else { VertexKind::Boundary };
-            released.push(v);
-        }
-        released
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use std::collections::VecDeque;
 
     use super::super::SimplifyOptions;
-    use super::super::classify::VertexKind;
     use super::super::cost::Candidate;
     use super::super::kernel::{NONE, State};
     use super::Retry;
@@ -173,54 +133,6 @@ mod tests {
             }
         }
         d
-    }
-
-    /// The wheel (centre 0, six faces around it, a ring of twelve outside) with texture
-    /// coordinates in three charts, each two of the centre's faces and the ring faces beyond them:
-    /// the centre is where three sets of values meet.
-    fn wheel_in_three_charts() -> crate::Mesh {
-        let mut mesh = super::super::legality::tests::wheel();
-        // Faces come three per sector k (the centre's, then two ring faces); chart k / 2.
-        let uvs = (0..3 * mesh.face_count())
-            .map(|corner| {
-                let chart = (corner / 3 / 3 / 2) as f32;
-                let p = mesh.positions[mesh.triangles[corner / 3][corner % 3] as usize];
-                [p[0] / 8.0 + chart, p[1] / 8.0]
-            })
-            .collect();
-        mesh.corners.uvs = Some(uvs);
-        mesh
-    }
-
-    #[test]
-    fn an_anchor_whose_faces_keep_two_sets_of_values_is_released() {
-        let mesh = wheel_in_three_charts();
-        let options = SimplifyOptions::default();
-        let (mut state, _) = State::new(&mesh, &options);
-        state.carry_attributes(&mesh);
-        assert_eq!(state.vertices[0].kind, VertexKind::Anchored, "three charts meet at the centre");
-        assert!(state.release_anchors().is_empty(), "all three sets are still there");
-        // The centre's corners in the third chart (sectors 4 and 5) take its values of the
-        // second, as they would once collapses took the third chart's faces at the centre away.
-        let second = state.source_at(3 * 2, 0);
-        for sector in [4u32, 5] {
-            let face = 3 * sector;
-            let k = state.triangles[face as usize].iter().position(|&v| v == 0).unwrap();
-            state.corner_source[3 * face as usize + k] = second;
-        }
-        assert_eq!(state.release_anchors(), vec![0]);
-        assert_eq!(state.vertices[0].kind, VertexKind::Interior, "its fan is closed");
-        assert!(state.on_seam[0], "still on the seam between its two charts");
-        // With seams locked an anchor stays one, whatever its corners.
-        let locked = SimplifyOptions { lock_seams: true, ..SimplifyOptions::default() };
-        let (mut state, _) = State::new(&mesh, &locked);
-        state.carry_attributes(&mesh);
-        for sector in [4u32, 5] {
-            let face = 3 * sector as usize;
-            let k = state.triangles[face].iter().position(|&v| v == 0).unwrap();
-            state.corner_source[3 * face + k] = state.source_at(3 * 2, 0);
-        }
-        assert!(state.release_anchors().is_empty());
     }
 
     #[test]

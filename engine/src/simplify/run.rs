@@ -64,7 +64,9 @@ pub(super) fn run(
     let mut neighbours = Vec::new();
     let mut refused = Refusals::default();
     let mut retry = Retry::default();
-    let mut released: Vec<bool> = Vec::new();
+    // Anchors are looked at again after each collapse that takes faces from them (meshes with
+    // per-corner attributes only: without them there are none to release).
+    let anchors = !state.corner_source.is_empty();
     let mut pops = 0usize;
     let mut passes = 1;
     let mut collapses_this_pass = 0;
@@ -94,17 +96,10 @@ pub(super) fn run(
             passes += 1;
             collapses_this_pass = 0;
             retry.prepare(state, &log);
-            // Anchors that lost a set of values may move from now on: their edges, too.
-            released.resize(vertex_count, false);
-            released.fill(false);
-            for v in state.release_anchors() {
-                released[v as usize] = true;
-            }
             for v in 0..vertex_count as u32 {
                 if state.vertex_alive[v as usize] {
                     neighbours.clear();
-                    let again = |u: u32| released[v as usize] || released[u as usize] || retry.needs(v, u);
-                    state.push_edges_where(v, v + 1, &mut heap, &mut neighbours, again);
+                    state.push_edges_where(v, v + 1, &mut heap, &mut neighbours, |u| retry.needs(v, u));
                 }
             }
             continue;
@@ -159,9 +154,23 @@ pub(super) fn run(
         max_collapse_error = max_collapse_error.max(error_paper);
         record.error = max_collapse_error as f32;
         faces_alive -= (record.left_face != NONE) as usize + (record.right_face != NONE) as usize;
+        let opposite = [record.left, record.right];
         log.push(record);
         collapses_this_pass += 1;
-        state.push_edges_of(candidate.survivor, &mut heap, &mut neighbours);
+        // The survivor and the two opposite vertices lost faces: an anchor among them whose faces
+        // now carry fewer sets of values may move from here on, and its edges are ranked again.
+        let survivor = candidate.survivor;
+        if anchors {
+            state.release_anchor(survivor);
+        }
+        state.push_edges_of(survivor, &mut heap, &mut neighbours);
+        if anchors {
+            for v in opposite {
+                if v != NONE && state.release_anchor(v) {
+                    state.push_edges_where(v, 0, &mut heap, &mut neighbours, |u| u != survivor);
+                }
+            }
+        }
         // The queue's refills drop the stale entries they pass over; where its heap takes most
         // pushes (refills then come seldom: fandisk's planar regions) they pile up instead. A mesh
         // has about 1.5 edges per face, so once the queue holds more than 2 entries per face a
