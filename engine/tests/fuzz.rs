@@ -222,6 +222,37 @@ fn arbitrary_mesh(rng: &mut SplitMix64) -> Mesh {
     Mesh::new(positions, triangles).unwrap()
 }
 
+/// Gives `mesh` per-corner texture coordinates, normals or both, each corner one of up to three
+/// values of its vertex: seams where a vertex's corners differ, anchors where three sets meet.
+fn arbitrary_corner_attributes(mesh: &mut Mesh, rng: &mut SplitMix64) {
+    let (uvs, normals) = match rng.next_u64() % 3 {
+        0 => (true, false),
+        1 => (false, true),
+        _ => (true, true),
+    };
+    let sets = 1 + rng.next_u64() % 3;
+    let palette: Vec<Vec<([f32; 2], [f32; 3])>> = (0..mesh.vertex_count())
+        .map(|_| {
+            (0..sets)
+                .map(|_| {
+                    let uv = [rng.next_f64() as f32, rng.next_f64() as f32];
+                    let n = [rng.next_f64() - 0.5, rng.next_f64() - 0.5, rng.next_f64() + 0.1];
+                    let length = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                    (uv, n.map(|x| (x / length) as f32))
+                })
+                .collect()
+        })
+        .collect();
+    let picks: Vec<([f32; 2], [f32; 3])> =
+        mesh.triangles.iter().flatten().map(|&v| palette[v as usize][(rng.next_u64() % sets) as usize]).collect();
+    if uvs {
+        mesh.corners.uvs = Some(picks.iter().map(|p| p.0).collect());
+    }
+    if normals {
+        mesh.corners.normals = Some(picks.iter().map(|p| p.1).collect());
+    }
+}
+
 #[test]
 fn simplify_pm_and_levels_survive_arbitrary_meshes() {
     let seed = setting("MESHLOD_FUZZ_SEED", 1);
@@ -229,7 +260,12 @@ fn simplify_pm_and_levels_survive_arbitrary_meshes() {
     let mut rng = SplitMix64::new(seed ^ 0x5eed);
     let (mut simplified, mut refused) = (0usize, 0usize);
     for case in 0..iterations {
-        let mesh = arbitrary_mesh(&mut rng);
+        let mut mesh = arbitrary_mesh(&mut rng);
+        // Half the meshes carry per-corner attributes (seams, anchors, the attribute records).
+        let with_attributes = rng.next_u64().is_multiple_of(2);
+        if with_attributes {
+            arbitrary_corner_attributes(&mut mesh, &mut rng);
+        }
         let options = SimplifyOptions {
             target_ratio: Some(rng.next_f64() * 0.99),
             metric: match rng.next_u64() % 3 {
@@ -247,7 +283,9 @@ fn simplify_pm_and_levels_survive_arbitrary_meshes() {
         match result {
             Ok(out) => {
                 out.mesh.check().unwrap();
+                assert_eq!(out.mesh.corners.names(), mesh.corners.names(), "case {case}: attributes kept");
                 let pm = out.progressive.unwrap();
+                assert_eq!(pm.has_attributes(), with_attributes, "case {case}");
                 no_panic("pm", seed, case, text.as_bytes(), || {
                     for bytes in [encode(&pm), encode_lossless(&pm)] {
                         let back = decode(&bytes, Path::new("fuzz.pm")).unwrap();
