@@ -13,7 +13,7 @@ use super::options::BoundaryMode;
 pub(super) const SMALL_FAN: usize = 16;
 
 /// Vertex classification, fixed at the start except for anchors released
-/// ([`State::release_anchor`]).
+/// ([`State::relax`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub(crate) enum VertexKind {
     #[default]
@@ -26,7 +26,7 @@ pub(crate) enum VertexKind {
     /// Never moves or disappears, but a neighbour may collapse into it (along the boundary, for a
     /// boundary neighbour): where three or more sets of attribute values meet, a locked seam's
     /// vertices and a locked border's. Assigned by the kernel, not by the scan; released when
-    /// collapses leave its faces fewer sets of values ([`State::release_anchor`]).
+    /// collapses leave its faces fewer sets of values ([`State::relax`]).
     Anchored,
 }
 
@@ -405,41 +405,54 @@ fn single_fan(fan: &[Corner], by_next: &mut Vec<(u32, u32)>, by_prev: &mut Vec<(
 }
 
 impl State<'_> {
-    /// Releases anchor `v` if its faces now carry exactly two sets of values, with the same texture
-    /// coordinates: it becomes an ordinary vertex again (interior or boundary, as its fan is closed
-    /// or not), still on its seam, and may move along it. Whether it was released.
+    /// Looks again at vertex `v` after a collapse took faces from it: whether a rule that held it
+    /// because of its sets of values no longer does, in which case its edges are to be ranked
+    /// again. Collapses only ever take sets away from a vertex (a removed vertex's corners take
+    /// the survivor's values), so what this lifts never comes back.
     ///
-    /// A vertex is anchored where three or more sets of values meet at the start; collapses
-    /// around it take faces away, and with them, at times, every corner of a set. Where the two
-    /// sets left differ in normals only (a hard edge through the vertex, the texture continuous)
-    /// it moves along that edge as any vertex of the edge does: on CesiumMan, whose anchors are
-    /// mostly of that kind, the position error at 10% fell to a third and the texture error to a
-    /// quarter (docs/attributes-report.md). The others stay, as measured: released where the two
-    /// sets differ in texture coordinates, fuze's seam vertices slid along the seam and nearly
-    /// doubled its texture error; released where one set is left, Fox's position error at 74
-    /// faces rose from 0.154 to 0.200. Not with locked borders or seams, whose anchors stay
-    /// whatever their corners.
-    pub(super) fn release_anchor(&mut self, v: u32) -> bool {
-        if self.vertices[v as usize].kind != VertexKind::Anchored
-            || self.options.boundary == BoundaryMode::Lock
-            || self.options.lock_seams
-        {
+    /// - An anchor (three or more sets met at the start) whose faces now carry exactly two sets,
+    ///   with the same texture coordinates, is released: an ordinary vertex again (interior or
+    ///   boundary, as its fan is closed or not), still on its seam, so it moves along it. Where the
+    ///   two sets differ in normals only (a hard edge through the vertex, the texture continuous)
+    ///   it moves along that edge as any vertex of the edge does: on CesiumMan, whose anchors are
+    ///   mostly of that kind, the position error at 10% fell to a third and the texture error to a
+    ///   quarter (docs/attributes-report.md). The other anchors stay, as measured: released where
+    ///   the two sets differ in texture coordinates, fuze's seam vertices slid along the seam and
+    ///   nearly doubled its texture error; released where one set is left, Fox's position error
+    ///   at 74 faces rose from 0.154 to 0.200.
+    /// - A seam vertex whose faces now carry one set is off the seam: inside one chart, it collapses
+    ///   as the chart's other vertices do (pirate's texture error 5.7 → 5.3 texels).
+    ///
+    /// Nothing with locked seams, and no anchor with locked borders: those stay whatever their
+    /// corners.
+    pub(super) fn relax(&mut self, v: u32) -> bool {
+        let kind = self.vertices[v as usize].kind;
+        let anchor = kind == VertexKind::Anchored && self.options.boundary != BoundaryMode::Lock;
+        let seam = self.on_seam[v as usize] && matches!(kind, VertexKind::Interior | VertexKind::Boundary);
+        if self.options.lock_seams || !(anchor || seam) {
             return false;
         }
-        // A corner of each set met, at most two.
+        // A corner of each set met, up to three.
         let fan = &self.fans[v as usize];
-        let mut sets = [NONE; 2];
+        let mut sets = [NONE; 3];
         for corner in fan {
             let source = self.source_at(corner.face, v);
             if sets.iter().any(|&s| s != NONE && self.same_values(s, source)) {
                 continue;
             }
-            let Some(slot) = sets.iter_mut().find(|s| **s == NONE) else { return false };
-            *slot = source;
+            match sets.iter_mut().find(|s| **s == NONE) {
+                Some(slot) => *slot = source,
+                None => return false,
+            }
+        }
+        let count = sets.iter().filter(|&&s| s != NONE).count();
+        if seam {
+            self.on_seam[v as usize] = count > 1;
+            return count == 1;
         }
         let bits = |uv: &Option<Vec<[f32; 2]>>, k: u32| uv.as_ref().map(|uv| uv[k as usize].map(f32::to_bits));
         let uvs = |k: u32| (bits(&self.attributes.uvs, k), bits(&self.attributes.uvs1, k));
-        if sets[1] == NONE || uvs(sets[0]) != uvs(sets[1]) {
+        if count != 2 || uvs(sets[0]) != uvs(sets[1]) {
             return false;
         }
         let closed = fan.iter().all(|c| fan.iter().any(|d| d.prev == c.next));
@@ -671,16 +684,17 @@ mod tests {
     }
 
     #[test]
-    fn an_anchor_left_with_two_sets_that_differ_in_normals_only_is_released() {
+    fn an_anchor_left_with_two_sets_that_differ_in_normals_only_is_released_and_a_seam_vertex_left_with_one_set_leaves_the_seam()
+     {
         for (uv_split, released) in [(false, true), (true, false)] {
             let mesh = wheel_in_three_sets(uv_split);
             let options = SimplifyOptions::default();
             let (mut state, _) = State::new(&mesh, &options);
             state.carry_attributes(&mesh);
             assert_eq!(state.vertices[0].kind, VertexKind::Anchored, "three sets meet at the centre");
-            assert!(!state.release_anchor(0), "all three sets are still there");
+            assert!(!state.relax(0), "all three sets are still there");
             centre_takes_values(&mut state, &[4, 5], 2);
-            assert_eq!(state.release_anchor(0), released, "texture coordinates split: {uv_split}");
+            assert_eq!(state.relax(0), released, "texture coordinates split: {uv_split}");
             if released {
                 assert_eq!(state.vertices[0].kind, VertexKind::Interior, "its fan is closed");
                 assert!(state.on_seam[0], "still on the edge between its two sets");
@@ -694,12 +708,29 @@ mod tests {
         let (mut state, _) = State::new(&mesh, &options);
         state.carry_attributes(&mesh);
         centre_takes_values(&mut state, &[1, 2, 3, 4, 5], 0);
-        assert!(!state.release_anchor(0));
+        assert!(!state.relax(0));
+        // A seam vertex: the centre with two sets, sectors 0-2 against 3-5 (a seam through it).
+        let mut halves = crate::simplify::legality::tests::wheel();
+        let uvs = (0..3 * halves.face_count())
+            .map(|k| {
+                let p = halves.positions[halves.triangles[k / 3][k % 3] as usize];
+                [p[0] / 8.0 + if k / 9 >= 3 { 1.0 } else { 0.0 }, p[1] / 8.0]
+            })
+            .collect();
+        halves.corners.uvs = Some(uvs);
+        let options = SimplifyOptions::default();
+        let (mut state, _) = State::new(&halves, &options);
+        state.carry_attributes(&halves);
+        assert_eq!(state.vertices[0].kind, VertexKind::Interior);
+        assert!(state.on_seam[0] && !state.relax(0), "two sets: on the seam");
+        centre_takes_values(&mut state, &[3, 4, 5], 0);
+        assert!(state.relax(0), "one set left");
+        assert!(!state.on_seam[0] && !state.relax(0));
         // With seams locked an anchor stays one, whatever its corners.
         let locked = SimplifyOptions { lock_seams: true, ..SimplifyOptions::default() };
         let (mut state, _) = State::new(&mesh, &locked);
         state.carry_attributes(&mesh);
         centre_takes_values(&mut state, &[4, 5], 2);
-        assert!(!state.release_anchor(0));
+        assert!(!state.relax(0));
     }
 }

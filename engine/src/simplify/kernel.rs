@@ -248,9 +248,9 @@ impl<'o> State<'o> {
     /// with one set of values at the removed vertex, the survivor's in the faces of the edge
     /// (which must agree); on a seam (two sets), the edge must be a seam edge, and each side takes
     /// the survivor's values on that side ([`State::seam_sides`], rule 7). A vertex with three or
-    /// more sets (where seams meet) is anchored: it never moves or goes, but takes in neighbours, until
-    /// its faces carry two sets or fewer ([`State::release_anchors`]). No value is invented and none
-    /// crosses a seam.
+    /// more sets (where seams meet) is anchored: it never moves or goes, but takes in neighbours,
+    /// until collapses leave it two sets that differ in normals only ([`State::relax`]). No value
+    /// is invented and none crosses a seam.
     /// (Values interpolated at the new position are later work.) Needs the triangle array, so it
     /// is kept current from here.
     pub(crate) fn carry_attributes(&mut self, mesh: &Mesh) {

@@ -106,9 +106,9 @@
 //!    b's corners take a's values on the same side, so an edge into a seam vertex must run along
 //!    the seam, and a vertex where three or more sets of values meet is anchored: it never goes,
 //!    and a neighbour that goes into it takes its values on the side it comes from
-//!    (`State::carry_attributes`, `State::seam_sides`); once collapses around it leave its faces
-//!    two sets or fewer it is an ordinary seam vertex again, from the next pass on
-//!    (`State::release_anchors`). Without attributes the rule costs nothing.
+//!    (`State::carry_attributes`, `State::seam_sides`); once collapses leave an anchor two sets
+//!    that differ in normals only, or a seam vertex one set, the rule lets go of it
+//!    (`State::relax`). Without attributes the rule costs nothing.
 
 mod attribute_quadric;
 mod classify;

@@ -64,8 +64,8 @@ pub(super) fn run(
     let mut neighbours = Vec::new();
     let mut refused = Refusals::default();
     let mut retry = Retry::default();
-    // Anchors are looked at again after each collapse that takes faces from them (meshes with
-    // per-corner attributes only: without them there are none to release).
+    // Seams and anchors are looked at again after each collapse that takes faces from their
+    // vertices (meshes with per-corner attributes only: without them there are none).
     let anchors = !state.corner_source.is_empty();
     let mut pops = 0usize;
     let mut passes = 1;
@@ -157,16 +157,16 @@ pub(super) fn run(
         let opposite = [record.left, record.right];
         log.push(record);
         collapses_this_pass += 1;
-        // The survivor and the two opposite vertices lost faces: an anchor among them whose faces
-        // now carry fewer sets of values may move from here on, and its edges are ranked again.
+        // The survivor and the two opposite vertices lost faces: one whose faces now carry fewer
+        // sets of values may be held by fewer rules (`State::relax`), and its edges are ranked again.
         let survivor = candidate.survivor;
         if anchors {
-            state.release_anchor(survivor);
+            state.relax(survivor);
         }
         state.push_edges_of(survivor, &mut heap, &mut neighbours);
         if anchors {
             for v in opposite {
-                if v != NONE && state.release_anchor(v) {
+                if v != NONE && state.relax(v) {
                     state.push_edges_where(v, 0, &mut heap, &mut neighbours, |u| u != survivor);
                 }
             }
