@@ -1,5 +1,7 @@
 //! Preparation and classification: drop faces that repeat a vertex, then one pass over the fans
-//! classifies every vertex (interior, boundary, frozen) and lists the edges.
+//! classifies every vertex (interior, boundary, frozen) and lists the edges. With per-corner
+//! attributes, [`State::relax`] lets go of an anchor or a seam vertex once collapses have taken
+//! its sets of values down far enough.
 
 use std::borrow::Cow;
 
@@ -684,8 +686,7 @@ mod tests {
     }
 
     #[test]
-    fn an_anchor_left_with_two_sets_that_differ_in_normals_only_is_released_and_a_seam_vertex_left_with_one_set_leaves_the_seam()
-     {
+    fn relax_releases_hard_edge_anchors_and_takes_one_chart_vertices_off_the_seam() {
         for (uv_split, released) in [(false, true), (true, false)] {
             let mesh = wheel_in_three_sets(uv_split);
             let options = SimplifyOptions::default();

@@ -66,7 +66,7 @@ pub(super) fn run(
     let mut retry = Retry::default();
     // Seams and anchors are looked at again after each collapse that takes faces from their
     // vertices (meshes with per-corner attributes only: without them there are none).
-    let anchors = !state.corner_source.is_empty();
+    let with_attributes = !state.corner_source.is_empty();
     let mut pops = 0usize;
     let mut passes = 1;
     let mut collapses_this_pass = 0;
@@ -160,11 +160,11 @@ pub(super) fn run(
         // The survivor and the two opposite vertices lost faces: one whose faces now carry fewer
         // sets of values may be held by fewer rules (`State::relax`), and its edges are ranked again.
         let survivor = candidate.survivor;
-        if anchors {
+        if with_attributes {
             state.relax(survivor);
         }
         state.push_edges_of(survivor, &mut heap, &mut neighbours);
-        if anchors {
+        if with_attributes {
             for v in opposite {
                 if v != NONE && state.relax(v) {
                     state.push_edges_where(v, 0, &mut heap, &mut neighbours, |u| u != survivor);
