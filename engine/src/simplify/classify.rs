@@ -434,23 +434,26 @@ impl State<'_> {
         if self.options.lock_seams || !(anchor || seam) {
             return false;
         }
-        // A corner of each set met, up to three.
+        // A corner of each set met: no more than a seam vertex may lose (one) or an anchor keep
+        // (two) when the rule is to let go; one more settles it.
+        let most = if seam { 1 } else { 2 };
         let fan = &self.fans[v as usize];
-        let mut sets = [NONE; 3];
+        let mut sets = [NONE; 2];
+        let mut count = 0;
         for corner in fan {
             let source = self.source_at(corner.face, v);
-            if sets.iter().any(|&s| s != NONE && self.same_values(s, source)) {
+            if sets[..count].iter().any(|&s| self.same_values(s, source)) {
                 continue;
             }
-            match sets.iter_mut().find(|s| **s == NONE) {
-                Some(slot) => *slot = source,
-                None => return false,
+            if count == most {
+                return false;
             }
+            sets[count] = source;
+            count += 1;
         }
-        let count = sets.iter().filter(|&&s| s != NONE).count();
         if seam {
-            self.on_seam[v as usize] = count > 1;
-            return count == 1;
+            self.on_seam[v as usize] = false;
+            return true;
         }
         let bits = |uv: &Option<Vec<[f32; 2]>>, k: u32| uv.as_ref().map(|uv| uv[k as usize].map(f32::to_bits));
         let uvs = |k: u32| (bits(&self.attributes.uvs, k), bits(&self.attributes.uvs1, k));
