@@ -135,7 +135,7 @@ fn main() {
         let look = |m: &Mesh| appearance_error(&mesh, m, 20_000, 1024.0, 1).expect("measures");
         let (a_ours, a_theirs) = (look(&ours.mesh), look(&theirs));
         let cell = |x: Option<Spread>, pick: fn(&Spread) -> f64| {
-            x.as_ref().map_or("–".to_string(), |s| format!("{:.1}", pick(s)))
+            x.as_ref().map_or("–".to_string(), |s| format!("{:.2}", pick(s)))
         };
         appearance_rows.push(format!(
             "| {} | {} / {} | {} / {} | {} / {} | {} / {} | {} / {} | {} / {} |",
