@@ -52,10 +52,8 @@ pub enum Command {
         /// copy; simplifying it then ignores the input's seams).
         #[arg(long)]
         drop_attributes: bool,
-        /// glTF output: store the vertex data as integers (KHR_mesh_quantization): about half
-        /// the bytes per vertex (positions on a 16-bit grid over the largest side).
-        #[arg(long)]
-        quantize: bool,
+        #[command(flatten)]
+        write: WriteArgs,
     },
     /// Symmetric Hausdorff distance between two meshes, with certified lower and upper bounds
     /// (units relative to A).
@@ -118,10 +116,8 @@ pub enum Command {
         /// Print one JSON object instead of text.
         #[arg(long)]
         json: bool,
-        /// glTF output: store the vertex data as integers (KHR_mesh_quantization): about half
-        /// the bytes per vertex (positions on a 16-bit grid over the largest side).
-        #[arg(long)]
-        quantize: bool,
+        #[command(flatten)]
+        write: WriteArgs,
     },
     /// Predict w and ETC for a mesh and a target with the shipped (or $MESHLOD_MODEL_DIR) model.
     Predict(PredictArgs),
@@ -232,6 +228,22 @@ impl std::str::FromStr for Auto {
     }
 }
 
+/// How a command writes its output mesh.
+#[derive(Debug, Clone, Copy, Default, Args)]
+pub struct WriteArgs {
+    /// glTF output: store the vertex data as integers (KHR_mesh_quantization): about half the
+    /// bytes per vertex (positions on a 16-bit grid over the largest side).
+    #[arg(long)]
+    pub quantize: bool,
+}
+
+impl WriteArgs {
+    /// The engine's write options these flags ask for.
+    pub fn options(&self) -> WriteOptions {
+        WriteOptions { quantize: self.quantize }
+    }
+}
+
 /// `meshlod simplify` flags (also `client simplify` and batch `simplify` jobs).
 #[derive(Debug, Clone, Args)]
 pub struct SimplifyArgs {
@@ -240,10 +252,8 @@ pub struct SimplifyArgs {
     /// Output mesh (.obj, .ply, .gltf or .glb).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// glTF output: store the vertex data as integers (KHR_mesh_quantization): about half the
-    /// bytes per vertex (positions on a 16-bit grid over the largest side).
-    #[arg(long)]
-    pub quantize: bool,
+    #[command(flatten)]
+    pub write: WriteArgs,
     /// Keep at most this many faces.
     #[arg(long)]
     pub faces: Option<u32>,
@@ -356,7 +366,7 @@ impl SimplifyArgs {
         SimplifyJob {
             input: self.input.clone(),
             output: self.output.clone(),
-            write: WriteOptions { quantize: self.quantize },
+            write: self.write.options(),
             options,
             pm: self.pm.clone(),
         }
@@ -371,10 +381,8 @@ pub struct RefineArgs {
     /// Output mesh (.obj, .ply, .gltf or .glb).
     #[arg(short, long)]
     pub output: PathBuf,
-    /// glTF output: store the vertex data as integers (KHR_mesh_quantization): about half the
-    /// bytes per vertex (positions on a 16-bit grid over the largest side).
-    #[arg(long)]
-    pub quantize: bool,
+    #[command(flatten)]
+    pub write: WriteArgs,
     /// Energy threshold coefficient: threshold = ETC × mean face energy; `auto` (with --faces) takes
     /// the predictor's estimate instead of the exact search.
     #[arg(long, required_unless_present = "faces")]
@@ -419,7 +427,7 @@ impl RefineArgs {
         RefineJob {
             input: self.input.clone(),
             output: self.output.clone(),
-            write: WriteOptions { quantize: self.quantize },
+            write: self.write.options(),
             request,
             reference: self.reference.clone(),
         }

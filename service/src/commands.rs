@@ -38,8 +38,8 @@ macro_rules! out {
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Info { file, json } => info(&file, json),
-        Command::Convert { input, output, clean, drop_attributes, quantize } => {
-            convert(&input, &output, clean, drop_attributes, &WriteOptions { quantize })
+        Command::Convert { input, output, clean, drop_attributes, write } => {
+            convert(&input, &output, clean, drop_attributes, &write.options())
         }
         Command::Hausdorff { a, b, tolerance, samples, seed, directed, json } => {
             let options = HausdorffOptions { samples, seed, tolerance, cancel: None };
@@ -49,8 +49,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Simplify(args) => run_simplify(&local(), &args),
         Command::Refine(args) => run_refine(&local(), &args),
         Command::Predict(args) => run_predict(&local(), &args),
-        Command::Lod { input, output, faces, vertices, max_error, json, quantize } => {
-            lod(&input, &output, faces, vertices, max_error, json, &WriteOptions { quantize })
+        Command::Lod { input, output, faces, vertices, max_error, json, write } => {
+            lod(&input, &output, faces, vertices, max_error, json, &write.options())
         }
         Command::Serve(args) => serve(args),
         Command::Client(args) => {
