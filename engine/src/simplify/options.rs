@@ -148,7 +148,8 @@ pub struct SimplifyOptions {
     /// before the normal factor, like the guard's term but with d measured on the fans the
     /// collapse changes only: from each new face's centroid to the plane of the face it was, and
     /// from each endpoint to the new faces that were its own (the module doc's "fan-distance
-    /// term"). Its price in time is in docs/benchmarks.md; ignored with Melax, while the guard is
+    /// term"), once half the input's faces are gone (the collapses before pay the paper's cost
+    /// alone). Its price in time is in docs/benchmarks.md; ignored with Melax, while the guard is
     /// on (the guard measures against the input instead) and on meshes with texture coordinates
     /// (measured worse there, docs/attributes-report.md).
     /// [`SimplifyStats::distance_term`] gives the weight that was used.
