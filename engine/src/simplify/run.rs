@@ -71,9 +71,13 @@ pub(super) fn run(
     let mut passes = 1;
     let mut collapses_this_pass = 0;
     let mut max_collapse_error: f64 = 0.0;
-    // The fan-distance term is measured once half the input's faces are gone (the guard's from
-    // the start): [`super::fan_term::FAN_TERM_FROM`].
-    let term_from = (faces_in as f64 * (1.0 - super::fan_term::FAN_TERM_FROM)).round() as usize;
+    // The face count from which the distance term is measured: the guard's from the start, the
+    // fan-distance term's once half the input's faces are gone ([`super::fan_term::FAN_TERM_FROM`]).
+    let term_from = if state.guard.is_some() {
+        faces_in
+    } else {
+        (faces_in as f64 * (1.0 - super::fan_term::FAN_TERM_FROM)).round() as usize
+    };
     let stop_reason = loop {
         // Stop: the face target is met.
         if faces_alive <= target {
@@ -117,7 +121,7 @@ pub(super) fn run(
             continue; // stale: an endpoint changed (or was removed) since this entry was queued
         }
         let mut chosen = None;
-        if state.has_distance_term() && entry.b & GUARDED == 0 && (state.guard.is_some() || faces_alive <= term_from) {
+        if state.has_distance_term() && entry.b & GUARDED == 0 && faces_alive <= term_from {
             // Queued without the distance term, which only adds: rank it with the term now, and
             // put it back unless it still comes first (the result is the greedy order of the
             // full costs, at one measurement per candidate that reaches the top).
