@@ -16,8 +16,11 @@
 //! ```
 //! The faces around `vs` from the one with half-edge `vs→vr` counter-clockwise to the one whose
 //! last corner is `vl` move to `vt`; the faces `(vs, vt, vl)` and `(vt, vs, vr)` are added (either
-//! may be absent on a boundary). `vs` returns to its position before the collapse, `vt` gets its
-//! own. Positions are stored as the input's `f32` values, so refining all the way gives back the
+//! may be absent on a boundary). A split that undoes the closing of a triangular hole (a boundary
+//! loop of three edges, which the simplifier's last collapse of it closes) names the hole's third
+//! corner as `vl` or `vr` ([`VertexSplit::hole`]): the faces move as above, and no face is added
+//! on that side, so the hole `(vs, vt, ·)` opens again. `vs` returns to its position before the
+//! collapse, `vt` gets its own. Positions are stored as the input's `f32` values, so refining all the way gives back the
 //! input bit for bit.
 
 use serde::Serialize;
@@ -125,10 +128,32 @@ pub(crate) struct CollapseRecord {
     pub right: u32,
     pub left_face: u32,
     pub right_face: u32,
+    /// The third corner of the triangular hole the collapse closed (on the side without a face),
+    /// or [`NO_VERTEX`].
+    pub hole: u32,
     pub survivor_position: [f32; 3],
     pub removed_position: [f32; 3],
     pub collapsed_position: [f32; 3],
     pub error: f32,
+}
+
+/// Which of a split's `vl` and `vr` is the third corner of a triangular hole that the split opens
+/// again rather than of a face it adds (see the module doc).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Hole {
+    /// Both name the faces they add (or are absent).
+    #[default]
+    None,
+    /// `vl` names the hole's corner: no face `(vs, vt, vl)`.
+    Left,
+    /// `vr` names the hole's corner: no face `(vt, vs, vr)`.
+    Right,
+}
+
+/// Number of faces a split with these third corners adds.
+pub(crate) fn faces_added(vl: u32, vr: u32, hole: Hole) -> usize {
+    (vl != NO_VERTEX) as usize + (vr != NO_VERTEX) as usize - (hole != Hole::None) as usize
 }
 
 /// One vertex split (the inverse of one edge collapse).
@@ -140,6 +165,8 @@ pub struct VertexSplit {
     pub vl: u32,
     /// Third vertex of the added face `(vt, vs, vr)`, or [`NO_VERTEX`].
     pub vr: u32,
+    /// Whether `vl` or `vr` names a hole's corner instead of a face's.
+    pub hole: Hole,
     /// Position of the new vertex `vt`.
     pub new_position: [f32; 3],
     /// Position of `vs` after the split.
@@ -160,7 +187,7 @@ impl VertexSplit {
 
     /// Number of faces the split adds.
     pub fn added_faces(&self) -> usize {
-        (self.vl != NO_VERTEX) as usize + (self.vr != NO_VERTEX) as usize
+        faces_added(self.vl, self.vr, self.hole)
     }
 }
 
@@ -174,6 +201,8 @@ pub struct StreamedSplit {
     pub vl: u32,
     /// See [`VertexSplit::vr`].
     pub vr: u32,
+    /// See [`VertexSplit::hole`].
+    pub hole: Hole,
     /// Position of the new vertex.
     pub new_position: [f32; 3],
     /// New position of `vs`, or `None` when it does not move.
@@ -238,10 +267,17 @@ impl ProgressiveMesh {
             .iter()
             .rev()
             .map(|r| {
+                // A closed hole's corner takes the side without a face.
+                let (left, right, hole) = match (r.hole, r.left) {
+                    (NO_VERTEX, _) => (r.left, r.right, Hole::None),
+                    (corner, NO_VERTEX) => (corner, r.right, Hole::Left),
+                    (corner, _) => (r.left, corner, Hole::Right),
+                };
                 let split = VertexSplit {
                     vs: map(r.survivor),
-                    vl: map(r.left),
-                    vr: map(r.right),
+                    vl: map(left),
+                    vr: map(right),
+                    hole,
                     new_position: r.removed_position,
                     split_position: r.survivor_position,
                     collapsed_position: r.collapsed_position,
@@ -298,6 +334,7 @@ impl ProgressiveMesh {
                 vs: s.vs,
                 vl: s.vl,
                 vr: s.vr,
+                hole: s.hole,
                 new_position: s.new_position,
                 split_position,
                 collapsed_position,
@@ -460,11 +497,11 @@ impl Fans {
         ring
     }
 
-    /// Applies the split of `vs` with `vl` and `vr` (or [`NO_VERTEX`]) that adds vertex `vt` (the
-    /// number of vertices before it) and its faces from
-    /// face number `next_face` on, and fills [`Fans::moved`]. An error says why the split does not
-    /// fit the mesh (the caller names the split).
-    pub fn split(&mut self, [vs, vl, vr]: [u32; 3], vt: u32, next_face: u32) -> Result<(), String> {
+    /// Applies the split of `vs` with `vl` and `vr` (or [`NO_VERTEX`]; `hole` names the one that
+    /// is a hole's corner, if any) that adds vertex `vt` (the number of vertices before it) and its
+    /// faces from face number `next_face` on, and fills [`Fans::moved`]. An error says why the
+    /// split does not fit the mesh (the caller names the split).
+    pub fn split(&mut self, [vs, vl, vr]: [u32; 3], hole: Hole, vt: u32, next_face: u32) -> Result<(), String> {
         let valid = |v: u32| v == NO_VERTEX || v < vt;
         if vs >= vt
             || !valid(vl)
@@ -475,6 +512,9 @@ impl Fans {
             || (vl == vr)
         {
             return Err(format!("vertex indices vs {vs} vl {vl} vr {vr} are invalid with {vt} vertices"));
+        }
+        if hole != Hole::None && (vl == NO_VERTEX || vr == NO_VERTEX) {
+            return Err(format!("a split that opens a hole needs both vl and vr (vl {vl} vr {vr})"));
         }
         let limit = self.vertex_faces[vs as usize].len();
         self.moved.clear();
@@ -522,7 +562,11 @@ impl Fans {
             self.vertex_faces[vt as usize].push(f);
         }
         let mut next_face = next_face;
-        for (present, t) in [(vl != NO_VERTEX, [vs, vt, vl]), (vr != NO_VERTEX, [vt, vs, vr])] {
+        let faces = [
+            (vl != NO_VERTEX && hole != Hole::Left, [vs, vt, vl]),
+            (vr != NO_VERTEX && hole != Hole::Right, [vt, vs, vr]),
+        ];
+        for (present, t) in faces {
             if present {
                 self.triangles[next_face as usize] = t;
                 for v in t {
@@ -651,7 +695,7 @@ impl<'p> LodCursor<'p> {
         let Some(s) = self.pm.splits.get(self.level) else { return Ok(()) };
         let vt = self.vertex_count() as u32;
         let first = self.face_count();
-        self.fans.split([s.vs, s.vl, s.vr], vt, first as u32).map_err(|reason| self.corrupt(reason))?;
+        self.fans.split([s.vs, s.vl, s.vr], s.hole, vt, first as u32).map_err(|reason| self.corrupt(reason))?;
         if let Some(a) = self.pm.attributes.as_ref().map(|a| &a.splits[self.level]) {
             for &f in &self.fans.moved {
                 let k = self.fans.triangles[f as usize].iter().position(|&v| v == vt).expect("moved to vt");

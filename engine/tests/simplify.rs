@@ -7,10 +7,10 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use meshlod_engine::io::read_mesh;
-use meshlod_engine::pm::ProgressiveMesh;
+use meshlod_engine::pm::{Hole, ProgressiveMesh};
 use meshlod_engine::pm_format::{decode, encode, encode_lossless};
 use meshlod_engine::simplify::{
-    BoundaryMode, Metric, Placement, SimplifyOptions, StopReason, prepare, simplify, simplify_search_w,
+    BoundaryMode, Metric, Placement, Simplified, SimplifyOptions, StopReason, prepare, simplify, simplify_search_w,
 };
 use meshlod_engine::validate::validate;
 use meshlod_engine::{Mesh, MeshError, procedural};
@@ -61,8 +61,15 @@ fn assert_exact_round_trip(name: &str, input: &Mesh, pm: &ProgressiveMesh) {
 }
 
 /// Output invariants: edge-manifold, no new non-manifold vertices, consistently oriented, no
-/// degenerate faces, boundaries kept, no folded-over face pairs.
-fn assert_valid_output(name: &str, input: &Mesh, output: &Mesh) {
+/// degenerate faces, boundaries kept but for the triangular holes the run says it closed, no
+/// folded-over face pairs.
+fn assert_valid_output(name: &str, input: &Mesh, out: &Simplified) {
+    let output = &out.mesh;
+    let holes = out.stats.holes_closed;
+    if let Some(pm) = &out.progressive {
+        let opened = pm.splits().iter().filter(|s| s.hole != Hole::None).count();
+        assert_eq!(opened, holes, "{name}: splits that open a hole");
+    }
     let before = validate(input);
     let after = validate(output);
     assert_eq!(after.non_manifold_edges, before.non_manifold_edges.min(after.non_manifold_edges), "{name}");
@@ -77,11 +84,11 @@ fn assert_valid_output(name: &str, input: &Mesh, output: &Mesh) {
     assert!(after.degenerate_faces <= before.degenerate_faces, "{name}: degenerate face created");
     assert!(after.duplicate_faces <= before.duplicate_faces, "{name}: duplicate face created");
     if before.non_manifold_edges == 0 && before.non_manifold_vertices == 0 {
-        assert_eq!(after.boundary_loops, before.boundary_loops, "{name}: boundary loops changed");
+        assert_eq!(after.boundary_loops + holes, before.boundary_loops, "{name}: boundary loops changed");
     }
     // Where loops meet at non-manifold vertices "loops" are ambiguous; the pieces of the
-    // boundary-edge graph are not.
-    assert_eq!(boundary_pieces(output), boundary_pieces(input), "{name}: boundary pieces changed");
+    // boundary-edge graph are not (a closed hole's three vertices were on no other loop).
+    assert_eq!(boundary_pieces(output) + holes, boundary_pieces(input), "{name}: boundary pieces changed");
     assert_eq!(after.components, before.components, "{name}: a component vanished or split");
     // Folded pairs: two faces sharing an edge whose normals point (almost) opposite ways. Scans
     // may already have some; simplification must not add any.
@@ -157,7 +164,7 @@ fn procedural_meshes_simplify_validly_and_round_trip() {
         for metric in [Metric::Qfvp { w: 1.0 }, Metric::Qem, Metric::Melax] {
             let out = simplify(&mesh, &SimplifyOptions { metric, ..options(0.95) }).unwrap();
             let label = format!("{name}/{}", metric.name());
-            assert_valid_output(&label, &mesh, &out.mesh);
+            assert_valid_output(&label, &mesh, &out);
             assert_exact_round_trip(&label, &mesh, out.progressive.as_ref().unwrap());
         }
     }
@@ -175,7 +182,7 @@ fn shared_meshes_at_99_percent_stay_valid_and_round_trip() {
                 || stats.stop_reason == StopReason::NoLegalCollapse,
             "{name}: {stats:?}"
         );
-        assert_valid_output(name, &mesh, &out.mesh);
+        assert_valid_output(name, &mesh, &out);
         assert_exact_round_trip(name, &mesh, out.progressive.as_ref().unwrap());
     }
 }
@@ -199,7 +206,7 @@ fn non_manifold_corpus_meshes_stay_valid_and_round_trip() {
             continue;
         }
         let out = simplify(&mesh, &options(0.8)).unwrap();
-        assert_valid_output(fields[0], &mesh, &out.mesh);
+        assert_valid_output(fields[0], &mesh, &out);
         assert_exact_round_trip(fields[0], &mesh, out.progressive.as_ref().unwrap());
         checked += 1;
     }
@@ -263,6 +270,74 @@ fn pm_file_round_trips_and_refuses_corruption() {
     }
 }
 
+/// `mesh` with faces taken out, each sharing no vertex with another taken out: every one leaves a
+/// triangular hole whose three vertices are on no other boundary.
+fn with_triangular_holes(mesh: &Mesh, every: usize) -> Mesh {
+    let mut used = vec![false; mesh.vertex_count()];
+    let mut out = mesh.clone();
+    out.triangles.clear();
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        if f % every == 0 && t.iter().all(|&v| !used[v as usize]) {
+            t.iter().for_each(|&v| used[v as usize] = true);
+        } else {
+            out.triangles.push(*t);
+        }
+    }
+    out
+}
+
+#[test]
+fn triangular_holes_close_and_their_splits_open_them_again_in_every_form() {
+    let mesh = with_triangular_holes(&procedural::bumpy_blob(24, 40, 9), 23);
+    let loops = validate(&mesh).boundary_loops;
+    assert!(loops >= 30, "{loops} holes");
+    let out = simplify(&mesh, &options(0.95)).unwrap();
+    assert!(out.stats.holes_closed > 0, "{:?}", out.stats);
+    // Both sides of the split record a hole (the collapsed edge's face runs either way).
+    let sides: Vec<Hole> = out.progressive.as_ref().unwrap().splits().iter().map(|s| s.hole).collect();
+    assert!(sides.contains(&Hole::Left) && sides.contains(&Hole::Right));
+    // The invariants (loops lost = holes closed = splits with a hole) and the exact round trip.
+    assert_valid_output("holed blob", &mesh, &out);
+    let pm = out.progressive.unwrap();
+    assert_exact_round_trip("holed blob", &mesh, &pm);
+    // Both file forms carry the holes: the same splits (lossless), the same faces at every level.
+    let lossless = decode(&encode_lossless(&pm), Path::new("t.pm")).unwrap();
+    assert_eq!(lossless.splits(), pm.splits());
+    let compact = decode(&encode(&pm), Path::new("t.pm")).unwrap();
+    let holes = |p: &ProgressiveMesh| p.splits().iter().map(|s| s.hole).collect::<Vec<_>>();
+    assert_eq!(holes(&compact), holes(&pm));
+    for level in (0..=pm.levels()).step_by(97).chain([pm.levels()]) {
+        assert_eq!(compact.at_level(level).triangles, pm.at_level(level).triangles, "level {level}");
+        assert_eq!(pm.at_level(level).face_count(), pm.faces_at_level(level), "level {level}");
+    }
+    // A level between two hole closings has the loops the straight run to its count leaves.
+    let level = pm.level_for_faces(mesh.face_count() / 2);
+    let straight = simplify(
+        &mesh,
+        &SimplifyOptions { target_faces: Some(pm.faces_at_level(level)), target_ratio: None, ..options(0.0) },
+    )
+    .unwrap();
+    assert_eq!(face_key(&pm.at_level(level)), face_key(&straight.mesh));
+    assert_eq!(validate(&straight.mesh).boundary_loops + straight.stats.holes_closed, loops);
+    // Locked borders keep every hole.
+    let locked = simplify(&mesh, &SimplifyOptions { boundary: BoundaryMode::Lock, ..options(0.95) }).unwrap();
+    assert_eq!(locked.stats.holes_closed, 0);
+    assert_eq!(validate(&locked.mesh).boundary_loops, loops);
+}
+
+#[test]
+fn beetle_reaches_its_face_target_at_90_percent() {
+    // Its 33 boundary loops shrink to triangles that only closing them takes further (45 frozen
+    // vertices on its non-manifold edges hold the rest).
+    let Some(mesh) = shared("beetle") else { return };
+    let out = simplify(&mesh, &options(0.9)).unwrap();
+    assert_eq!(out.stats.stop_reason, StopReason::TargetReached, "{:?}", out.stats);
+    assert_eq!(out.stats.faces_out, out.stats.target_faces);
+    assert!(out.stats.holes_closed > 0);
+    assert_valid_output("beetle", &mesh, &out);
+    assert_exact_round_trip("beetle", &mesh, out.progressive.as_ref().unwrap());
+}
+
 #[test]
 fn cost_strategies_differ_where_they_should() {
     // On a curved surface QFVP (w > 0) reorders QEM's collapses: an edge whose endpoint normals
@@ -308,7 +383,7 @@ fn boundaries_are_kept_or_locked() {
     let border = |m: &Mesh| m.positions.iter().filter(|p| p[0].abs() == 1.0 || p[1].abs() == 1.0).count();
     assert_eq!(border(&locked.mesh), border(&mesh), "locked boundary vertices must all stay");
     let preserved = simplify(&mesh, &options(0.9)).unwrap();
-    assert_valid_output("terrain/preserve", &mesh, &preserved.mesh);
+    assert_valid_output("terrain/preserve", &mesh, &preserved);
     // Boundary vertices stay on the square's border (their constraint planes hold them there).
     let report = validate(&preserved.mesh);
     assert_eq!(report.boundary_loops, 1);
@@ -411,7 +486,7 @@ fn distance_terms_keep_thin_tips() {
     let run = |distance_term, guard| {
         let label = format!("spiky/term {distance_term}/guard {guard}");
         let out = simplify(&mesh, &SimplifyOptions { distance_term, guard, ..options(0.95) }).unwrap();
-        assert_valid_output(&label, &mesh, &out.mesh);
+        assert_valid_output(&label, &mesh, &out);
         assert_exact_round_trip(&label, &mesh, out.progressive.as_ref().unwrap());
         assert_eq!(out.stats.distance_term, if guard > 0.0 { 0.0 } else { distance_term }, "{label}");
         let d = meshlod_engine::hausdorff::hausdorff(&mesh, &out.mesh, &Default::default()).unwrap().hausdorff;
@@ -452,7 +527,7 @@ fn distance_guard_on_shared_meshes_at_99_percent_stays_valid_and_round_trips() {
         let mesh = read_mesh(dir.join(format!("{name}.obj"))).unwrap();
         let out = simplify(&mesh, &SimplifyOptions { guard: 1.0, ..options(0.99) }).unwrap();
         let label = format!("{name}/guard");
-        assert_valid_output(&label, &mesh, &out.mesh);
+        assert_valid_output(&label, &mesh, &out);
         assert_exact_round_trip(&label, &mesh, out.progressive.as_ref().unwrap());
     }
 }

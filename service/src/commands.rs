@@ -150,8 +150,13 @@ fn run_simplify(executor: &dyn Executor, args: &SimplifyArgs) -> Result<()> {
     if args.json {
         return print_json(&report);
     }
+    let holes = match text(&report, "holes_closed").as_str() {
+        "0" => String::new(),
+        "1" => ", 1 triangular hole closed".into(),
+        n => format!(", {n} triangular holes closed"),
+    };
     out!(
-        "{} → {} faces, {} → {} vertices ({}): {} collapses, {} refused, {} frozen vertices",
+        "{} → {} faces, {} → {} vertices ({}): {} collapses, {} refused, {} frozen vertices{holes}",
         text(&report, "faces_in"),
         text(&report, "faces_out"),
         text(&report, "vertices_in"),

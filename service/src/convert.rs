@@ -8,7 +8,7 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use meshlod_engine::io::{MeshFormat, ReadLimits, WriteOptions, read_mesh_bytes};
-use meshlod_engine::pm::{NO_VERTEX, ProgressiveMesh, StreamedSplit, VertexSplit};
+use meshlod_engine::pm::{Hole, NO_VERTEX, ProgressiveMesh, StreamedSplit, VertexSplit};
 use meshlod_engine::simplify::{BoundaryMode, Metric, NormalUpdate, Placement, SimplifyOptions};
 use meshlod_engine::{Mesh, MeshError};
 use tonic::Status;
@@ -263,6 +263,11 @@ pub fn split_to_proto(s: &VertexSplit) -> proto::VertexSplit {
         vs: s.vs,
         vl: (s.vl != NO_VERTEX).then_some(s.vl),
         vr: (s.vr != NO_VERTEX).then_some(s.vr),
+        hole: match s.hole {
+            Hole::None => proto::Hole::Unspecified,
+            Hole::Left => proto::Hole::Left,
+            Hole::Right => proto::Hole::Right,
+        } as i32,
         position: s.new_position.to_vec(),
         vs_position: if s.moves_vs() { s.split_position.to_vec() } else { Vec::new() },
         error: s.error,
@@ -309,6 +314,12 @@ pub fn progressive_from_proto(base: &proto::Mesh, splits: &[proto::VertexSplit])
             vs: s.vs,
             vl: s.vl.unwrap_or(NO_VERTEX),
             vr: s.vr.unwrap_or(NO_VERTEX),
+            hole: match proto::Hole::try_from(s.hole) {
+                Ok(proto::Hole::Unspecified) => Hole::None,
+                Ok(proto::Hole::Left) => Hole::Left,
+                Ok(proto::Hole::Right) => Hole::Right,
+                Err(_) => return Err(invalid(format!("splits[{j}].hole"), format!("unknown value {}", s.hole))),
+            },
             new_position: triple(&s.position, "position")?,
             split_position: if s.vs_position.is_empty() { None } else { Some(triple(&s.vs_position, "vs_position")?) },
             error: s.error,
@@ -440,5 +451,38 @@ mod tests {
         for (t, u) in back.triangles.iter().zip(&mesh.triangles) {
             assert_eq!(t.map(|v| back.positions[v as usize]), u.map(|v| mesh.positions[v as usize]));
         }
+    }
+
+    #[test]
+    fn splits_that_open_holes_travel_and_a_bad_hole_value_is_named() {
+        // A sphere with faces taken out (a triangular hole each), simplified until holes close:
+        // the contract carries which side is the hole's, and the rebuilt mesh matches at every
+        // level.
+        use meshlod_engine::simplify::{SimplifyOptions, simplify};
+        let mut mesh = meshlod_engine::procedural::icosphere(3);
+        let mut used = vec![false; mesh.vertex_count()];
+        mesh.triangles.retain(|t| {
+            let keep = t.iter().any(|&v| used[v as usize]);
+            if !keep {
+                t.iter().for_each(|&v| used[v as usize] = true);
+            }
+            keep
+        });
+        let options = SimplifyOptions { target_ratio: Some(0.95), record_progressive: true, ..Default::default() };
+        let pm = simplify(&mesh, &options).unwrap().progressive.unwrap();
+        assert!(pm.splits().iter().any(|s| s.hole != Hole::None));
+        let sent = progressive_to_proto(&pm, false);
+        assert!(sent.splits.iter().any(|s| s.hole == proto::Hole::Left as i32));
+        assert!(sent.splits.iter().any(|s| s.hole == proto::Hole::Right as i32));
+        let base = sent.base.as_ref().unwrap();
+        let back = progressive_from_proto(base, &sent.splits).unwrap();
+        for level in [0, pm.levels() / 3, pm.levels()] {
+            assert_eq!(back.at_level(level), pm.at_level(level), "level {level}");
+        }
+        let mut bad = sent.splits.clone();
+        let j = bad.iter().position(|s| s.hole != 0).unwrap();
+        bad[j].hole = 7;
+        let status = progressive_from_proto(base, &bad).unwrap_err();
+        assert!(status.message().contains(&format!("splits[{j}].hole")), "{}", status.message());
     }
 }

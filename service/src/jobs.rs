@@ -132,6 +132,7 @@ pub fn simplify(
         distance_term: s.distance_term,
         warnings: simplify_warnings(o).into_iter().chain(mesh.corners.not_carried_warning()).collect(),
         frozen_vertices: s.frozen_vertices as u32,
+        holes_closed: s.holes_closed as u32,
         target_faces: s.target_faces as u32,
         rejected: s.rejected as u64,
         placement: format!("{:?}", result.stats.placement).to_lowercase(),

@@ -54,6 +54,7 @@ pub fn simplify(s: &proto::SimplifyStats, measured: Option<&proto::HausdorffRepo
         "stop_reason": s.stop_reason,
         "rejected": s.rejected,
         "frozen_vertices": s.frozen_vertices,
+        "holes_closed": s.holes_closed,
         "metric": s.metric,
         "w": if s.metric == "melax" { Value::Null } else { json!(s.w) },
         "w_source": w_source,

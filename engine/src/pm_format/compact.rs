@@ -15,7 +15,9 @@ use super::{
 };
 use crate::error::MeshError;
 use crate::mesh::{CornerAttributes, Mesh, NO_MATERIAL};
-use crate::pm::{Fans, NO_VERTEX, PmAttributes, ProgressiveMesh, SplitAttributes, StreamedSplit, VertexSplit};
+use crate::pm::{
+    Fans, Hole, NO_VERTEX, PmAttributes, ProgressiveMesh, SplitAttributes, StreamedSplit, VertexSplit, faces_added,
+};
 
 /// A split's error rounded up to 16 bits (sign, exponent and 7 bits of significand, so within
 /// 0.8 % above it): the code keeps the errors' order and never understates one.
@@ -33,11 +35,13 @@ fn error_value(code: u64) -> f32 {
     f32::from_bits((code as u32) << 16)
 }
 
-/// How a split's faces change: both added faces, only `(vs, vt, vl)` or only `(vt, vs, vr)`.
+/// How a split's faces change: both added faces, only `(vs, vt, vl)`, only `(vt, vs, vr)`, or one
+/// of them and a hole on the other side (a bit after the case says which: 0 the hole on the left).
 fn case_of(s: &VertexSplit) -> u64 {
-    match (s.vl != NO_VERTEX, s.vr != NO_VERTEX) {
-        (true, true) => 0,
-        (true, false) => 1,
+    match (s.vl != NO_VERTEX, s.vr != NO_VERTEX, s.hole) {
+        (_, _, Hole::Left | Hole::Right) => 3,
+        (true, true, _) => 0,
+        (true, false, _) => 1,
         _ => 2,
     }
 }
@@ -79,6 +83,9 @@ pub(super) fn encode_geometry(out: &mut Vec<u8>, pm: &ProgressiveMesh, grid: &Gr
         let new = grid.quantize(&s.new_position);
         let moved = grid.quantize(&s.split_position);
         w.put(case_of(s), 2);
+        if s.hole != Hole::None {
+            w.bit(s.hole == Hole::Right);
+        }
         w.bit(moved != from);
         w.put(s.vs as u64, width_for(vt as u64));
         let ring = fans.neighbours(s.vs);
@@ -107,7 +114,7 @@ pub(super) fn encode_geometry(out: &mut Vec<u8>, pm: &ProgressiveMesh, grid: &Gr
             Some(p) => codes.error.put_signed(&mut w, p as i64 - code as i64),
         }
         previous_error = Some(code);
-        fans.split([s.vs, s.vl, s.vr], vt, pm.faces_at_level(j) as u32).expect("a ProgressiveMesh replays");
+        fans.split([s.vs, s.vl, s.vr], s.hole, vt, pm.faces_at_level(j) as u32).expect("a ProgressiveMesh replays");
         at[s.vs as usize] = moved;
         at.push(new);
     }
@@ -179,9 +186,11 @@ pub(super) fn decode_geometry(
         let bad = |reason: String| MeshError::parse(r.path, format!("split {j}"), reason);
         let vt = (n0 + j) as u32;
         let case = b.get(2).map_err(cut)?;
-        if case == 3 {
-            return Err(bad("invalid split case 3".into()));
-        }
+        let hole = match case {
+            3 if b.bit().map_err(cut)? => Hole::Right,
+            3 => Hole::Left,
+            _ => Hole::None,
+        };
         let moves = b.bit().map_err(cut)?;
         let vs = b.get(width_for(vt as u64)).map_err(cut)? as u32;
         if vs >= vt {
@@ -235,14 +244,15 @@ pub(super) fn decode_geometry(
             return Err(bad(format!("error code {code:#x} is not a finite error")));
         }
         previous_error = Some(code);
-        fans.split([vs, vl, vr], vt, faces).map_err(bad)?;
-        faces += (vl != NO_VERTEX) as u32 + (vr != NO_VERTEX) as u32;
+        fans.split([vs, vl, vr], hole, vt, faces).map_err(bad)?;
+        faces += faces_added(vl, vr, hole) as u32;
         at[vs as usize] = moved;
         at.push(new);
         splits.push(StreamedSplit {
             vs,
             vl,
             vr,
+            hole,
             new_position: grid.value(&new),
             split_position: moves.then(|| grid.value(&moved)),
             error: error_value(code),
@@ -479,7 +489,7 @@ pub(super) fn encode_attributes(
     for (j, (s, sa)) in pm.splits().iter().zip(&a.splits).enumerate() {
         let vt = (n0 + j) as u32;
         let first = pm.faces_at_level(j);
-        fans.split([s.vs, s.vl, s.vr], vt, first as u32).expect("a ProgressiveMesh replays");
+        fans.split([s.vs, s.vl, s.vr], s.hole, vt, first as u32).expect("a ProgressiveMesh replays");
         let moved = std::mem::take(&mut fans.moved);
         let olds = unset_moved(&fans, &mut state.corners, &moved, vt);
         for (&f, &(k, old)) in moved.iter().zip(&olds) {
@@ -594,7 +604,7 @@ pub(super) fn decode_attributes(r: &mut Reader, pm: &ProgressiveMesh) -> Result<
         let bad = |reason: String| MeshError::parse(path, format!("split {j} attributes"), reason);
         let vt = (n0 + j) as u32;
         let first = pm.faces_at_level(j);
-        fans.split([s.vs, s.vl, s.vr], vt, first as u32).map_err(bad)?;
+        fans.split([s.vs, s.vl, s.vr], s.hole, vt, first as u32).map_err(bad)?;
         let moved_faces = std::mem::take(&mut fans.moved);
         let olds = unset_moved(&fans, &mut state.corners, &moved_faces, vt);
         let mut moved = Vec::new();

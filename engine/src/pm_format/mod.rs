@@ -15,7 +15,7 @@ use std::collections::HashMap;
 
 use crate::error::MeshError;
 use crate::mesh::{CornerAttributes, Image, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL, Rig, RigAccessor};
-use crate::pm::{NO_VERTEX, PmAttributes, ProgressiveMesh, SplitAttributes, StreamedSplit};
+use crate::pm::{Hole, NO_VERTEX, PmAttributes, ProgressiveMesh, SplitAttributes, StreamedSplit, faces_added};
 
 /// First four bytes of a `.pm` file.
 pub const MAGIC: [u8; 4] = *b"MLPM";
@@ -46,6 +46,9 @@ const MIN_SPLIT_SIZE: usize = 1 + 1 + 12 + 4;
 const HAS_VL: u8 = 1;
 const HAS_VR: u8 = 2;
 const MOVES_VS: u8 = 4;
+/// With both `HAS_VL` and `HAS_VR`: `vl` (or `vr`) is the corner of a hole the split opens.
+const HOLE_VL: u8 = 8;
+const HOLE_VR: u8 = 16;
 
 /// FNV-1a, 64 bit: detects corruption (not tampering).
 fn fnv1a(bytes: &[u8]) -> u64 {
@@ -170,7 +173,12 @@ pub fn encode_lossless(pm: &ProgressiveMesh) -> Vec<u8> {
     for s in pm.splits() {
         let flags = if s.vl != NO_VERTEX { HAS_VL } else { 0 }
             | if s.vr != NO_VERTEX { HAS_VR } else { 0 }
-            | if s.moves_vs() { MOVES_VS } else { 0 };
+            | if s.moves_vs() { MOVES_VS } else { 0 }
+            | match s.hole {
+                Hole::None => 0,
+                Hole::Left => HOLE_VL,
+                Hole::Right => HOLE_VR,
+            };
         out.push(flags);
         put_varint(&mut out, s.vs as u64);
         for v in [s.vl, s.vr] {
@@ -637,7 +645,17 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<ProgressiveMesh, MeshError> {
     let mut splits = Vec::with_capacity(split_count);
     for j in 0..split_count {
         let flags = r.take(1)?[0];
-        if flags & !(HAS_VL | HAS_VR | MOVES_VS) != 0 || flags & (HAS_VL | HAS_VR) == 0 {
+        let hole = match flags & (HOLE_VL | HOLE_VR) {
+            0 => Hole::None,
+            HOLE_VL => Hole::Left,
+            _ => Hole::Right,
+        };
+        let both = HAS_VL | HAS_VR;
+        if flags & !(both | MOVES_VS | HOLE_VL | HOLE_VR) != 0
+            || flags & both == 0
+            || flags & (HOLE_VL | HOLE_VR) == HOLE_VL | HOLE_VR
+            || (hole != Hole::None && flags & both != both)
+        {
             return Err(MeshError::parse(path, format!("split {j}"), format!("invalid flags {flags:#04x}")));
         }
         let limit = (vertex_count + j) as u64;
@@ -664,11 +682,10 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<ProgressiveMesh, MeshError> {
         let new_position = r.position()?;
         let split_position = if flags & MOVES_VS != 0 { Some(r.position()?) } else { None };
         let error = r.f32()?;
-        splits.push(StreamedSplit { vs: vs as u32, vl, vr, new_position, split_position, error });
+        splits.push(StreamedSplit { vs: vs as u32, vl, vr, hole, new_position, split_position, error });
     }
     let mut attributes = if flags & HAS_ATTRIBUTES != 0 {
-        let added: Vec<usize> =
-            splits.iter().map(|s| (s.vl != NO_VERTEX) as usize + (s.vr != NO_VERTEX) as usize).collect();
+        let added: Vec<usize> = splits.iter().map(|s| faces_added(s.vl, s.vr, s.hole)).collect();
         Some(decode_attributes(&mut r, face_count, &added)?)
     } else {
         None

@@ -522,6 +522,7 @@ impl<'o> State<'o> {
             right: NONE,
             left_face: NONE,
             right_face: NONE,
+            hole: legal.hole,
             survivor_position: self.vertices[a as usize].position,
             removed_position: self.vertices[b as usize].position,
             collapsed_position: c.position,
@@ -591,6 +592,13 @@ impl<'o> State<'o> {
             self.fans[a as usize].push(*corner);
         }
         self.vertex_alive[b as usize] = false;
+        if legal.hole != NONE {
+            // The hole closed: the merged vertex's fan and the hole's third corner's are closed now
+            // (the caller ranks the corner's edges again: their class changed).
+            self.vertices[a as usize].kind = VertexKind::Interior;
+            self.vertices[legal.hole as usize].kind = VertexKind::Interior;
+            self.version[legal.hole as usize] = self.version[legal.hole as usize].wrapping_add(1);
+        }
         let removed = self.vertices[b as usize];
         let survivor = &mut self.vertices[a as usize];
         survivor.position = c.position;

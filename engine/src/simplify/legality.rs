@@ -8,6 +8,7 @@ use super::classify::VertexKind;
 use super::cost::Candidate;
 use super::kernel::{NONE, State, to_f64};
 use super::options::Refusal;
+use crate::fan::Corner;
 
 /// A collapse that passed [`State::is_legal`]: the only way to ask for [`State::collapse`]. It
 /// names the check that passed it, so the collapse knows whether that check's new face normals
@@ -16,6 +17,7 @@ use super::options::Refusal;
 pub(crate) struct Legal {
     pub(super) candidate: Candidate,
     pub(super) check: u32,
+    pub(super) hole: u32,
 }
 
 impl Legal {
@@ -130,7 +132,8 @@ impl State<'_> {
         let (a, b) = (c.survivor, c.removed);
         self.prefetch_ring(a, b);
         // Rule 3, link condition: the edge has one or two faces, and the common neighbours of its
-        // ends are exactly the opposite vertices of those faces.
+        // ends are exactly the opposite vertices of those faces, or those and the third corner of
+        // a triangular hole that the collapse closes.
         let (shared, shared_count) = self.edge_corners(a, b);
         if shared_count == 0 || shared_count > 2 {
             return Err(Refusal::Link);
@@ -142,21 +145,28 @@ impl State<'_> {
             self.mark[corner.prev as usize] = stamp;
         }
         // Counted without a branch on the data (whether a neighbour of b is one of a's is as good
-        // as random): each common neighbour once, and whether any is not opposite the edge.
+        // as random): each common neighbour once, and those not opposite the edge (the last one).
         let mut common = 0;
-        let mut stray = false;
+        let mut strays = 0;
+        let mut stray = NONE;
         for corner in &self.fans[b as usize] {
             for v in [corner.next, corner.prev] {
                 let mark = &mut self.mark[v as usize];
                 let hit = (v != a) & (*mark == stamp);
                 *mark = if hit { stamp.wrapping_sub(1) } else { *mark }; // count each neighbour once
-                stray |= hit & (v != opposite[0]) & (v != opposite[1]);
+                let off_edge = hit & (v != opposite[0]) & (v != opposite[1]);
+                strays += off_edge as usize;
+                stray = if off_edge { v } else { stray };
                 common += hit as usize;
             }
         }
-        if stray || common != shared_count {
+        let hole = if strays == 0 && common == shared_count {
+            NONE
+        } else if strays == 1 && common == 2 && shared_count == 1 && self.closes_hole(a, b, stray, shared[0]) {
+            stray
+        } else {
             return Err(Refusal::Link);
-        }
+        };
         // Rule 1 for a frozen survivor (non-manifold or inconsistently oriented around it): its
         // edges to the opposite vertices each have exactly one face besides the collapsing one,
         // which crosses the edge the other way, so that the faces b brings attach to one sheet,
@@ -169,7 +179,7 @@ impl State<'_> {
         }
         // Rule 3, the merged vertex keeps enough faces.
         let remaining = self.fans[a as usize].len() + self.fans[b as usize].len() - 2 * shared_count;
-        let interior = self.is_interior(a) && self.is_interior(b);
+        let interior = hole != NONE || (self.is_interior(a) && self.is_interior(b));
         if remaining < if interior { 3 } else { 1 } {
             return Err(Refusal::TooFewFaces);
         }
@@ -240,7 +250,7 @@ impl State<'_> {
         if folded {
             return Err(Refusal::Fold);
         }
-        Ok(Legal { candidate: *c, check: self.check_id })
+        Ok(Legal { candidate: *c, check: self.check_id, hole })
     }
 
     /// Whether edge (a, v) has, besides the face it shares with b, exactly one face, crossing the
@@ -253,6 +263,35 @@ impl State<'_> {
             others += (corner.touches(v) && !corner.touches(b)) as u32;
         }
         others == 1 && forward == 1 && back == 1
+    }
+
+    /// Whether boundary edge (a, b), whose one face is `edge_face` (a's corner of it), and c, a
+    /// common neighbour of a and b off that face, bound a triangular hole that collapsing (a, b)
+    /// closes: a, b and c are plain boundary vertices (one open fan each), (a, c) and (b, c) are
+    /// boundary edges whose faces run the hole's way round (so that, renamed, they meet across
+    /// (a, c) as a manifold edge does), those faces' third corners differ (else the two would
+    /// become one face twice: a tetrahedron missing one face), and c keeps three faces or more
+    /// once its fan closes. With per-corner attributes, the two faces that come to meet across
+    /// (a, c) also agree on the values there (b's corners take a's values in the edge's face):
+    /// closing the hole makes no seam that rule 7 did not see.
+    fn closes_hole(&self, a: u32, b: u32, c: u32, edge_face: Corner) -> bool {
+        let plain = |v: u32| self.vertices[v as usize].kind == VertexKind::Boundary;
+        if !(plain(a) && plain(b) && plain(c)) || self.fans[c as usize].len() < 3 {
+            return false;
+        }
+        let only_face = |x: u32| match self.edge_corners(x, c) {
+            (corners, 1) => Some(corners[0]),
+            _ => None,
+        };
+        let (Some(ac), Some(bc)) = (only_face(a), only_face(b)) else { return false };
+        // With the face of (a, b) running a → b, the hole runs b → a → c: the face on (a, c) runs
+        // c → a and the one on (b, c) b → c.
+        let runs = if edge_face.next == b { ac.prev == c && bc.next == c } else { ac.next == c && bc.prev == c };
+        let values_agree = self.corner_source.is_empty() || {
+            let same = |f: u32, g: u32, v: u32| self.same_values(self.source_at(f, v), self.source_at(g, v));
+            same(ac.face, edge_face.face, a) && same(ac.face, bc.face, c)
+        };
+        runs && ac.other(c) != bc.other(c) && values_agree
     }
 
     /// Whether `v` has a closed fan (an anchor is looked at: its kind does not say).
@@ -392,6 +431,35 @@ pub(super) mod tests {
     fn a_plain_collapse_is_legal() {
         // The midpoint of the edge: every moved face keeps its side and its shape.
         assert_eq!(check(&wheel(), &SimplifyOptions::default(), 0, 1, [0.5, 0.0, 0.0]), Ok(()));
+    }
+
+    #[test]
+    fn a_triangular_hole_closes_but_a_tetrahedron_missing_a_face_stays_open() {
+        // The wheel without its face (0, 1, 2): the centre and inner vertices 1, 2 bound a hole.
+        // Collapsing its edge (0, 1) closes it: 2 is a common neighbour off the edge's one face.
+        let mut holed = wheel();
+        holed.triangles.retain(|&t| t != [0, 1, 2]);
+        let options = SimplifyOptions::default();
+        let (mut state, _) = State::new(&holed, &options);
+        let legal = state.is_legal(&Candidate { cost: 0.0, survivor: 0, removed: 1, position: [0.5, 0.0, 0.0] });
+        assert_eq!(legal.as_ref().map(|l| l.hole), Ok(2));
+        state.collapse(legal.unwrap());
+        assert!([0, 2].iter().all(|&v| state.kind(v) == VertexKind::Interior));
+        // Its other edges close it too (2 into 0 along the edge's face (0, 2, 3)).
+        assert_eq!(check(&holed, &options, 0, 2, [0.25, 0.433, 0.0]), Ok(()));
+        // A tetrahedron missing a face: closing its hole would leave the third corner two faces
+        // that are one face twice.
+        let cup = Mesh::new(
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            vec![[0, 1, 3], [1, 2, 3], [2, 0, 3]],
+        )
+        .unwrap();
+        for (a, b) in [(0, 1), (1, 2), (2, 0), (1, 0)] {
+            assert_eq!(check(&cup, &options, a, b, [0.3, 0.3, 0.0]), Err(Refusal::Link), "{a}-{b}");
+        }
+        // Locked borders are anchors: no hole closes.
+        let locked = SimplifyOptions { boundary: super::super::BoundaryMode::Lock, ..options.clone() };
+        assert_eq!(check(&holed, &locked, 0, 1, [0.5, 0.0, 0.0]), Err(Refusal::Link));
     }
 
     #[test]

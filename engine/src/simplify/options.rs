@@ -243,6 +243,9 @@ pub struct SimplifyStats {
     /// or inconsistently oriented neighbourhoods (frozen), where three or more sets of attribute
     /// values meet, locked seams' vertices and boundary vertices under [`BoundaryMode::Lock`].
     pub frozen_vertices: usize,
+    /// Triangular holes (boundary loops of three edges) closed by collapsing one of their edges
+    /// (rule 3): each takes one boundary loop away.
+    pub holes_closed: usize,
     /// Faces dropped before simplifying because they repeat a vertex index.
     pub dropped_degenerate_faces: usize,
     /// The fan-distance term's weight that applied: 0 where it was off or did not apply (Melax,

@@ -161,7 +161,7 @@ pub(super) fn run(
         max_collapse_error = max_collapse_error.max(error_paper);
         record.error = max_collapse_error as f32;
         faces_alive -= (record.left_face != NONE) as usize + (record.right_face != NONE) as usize;
-        let opposite = [record.left, record.right];
+        let (opposite, hole) = ([record.left, record.right], record.hole);
         log.push(record);
         collapses_this_pass += 1;
         // The survivor and the two opposite vertices lost faces: one whose faces now carry fewer
@@ -171,6 +171,10 @@ pub(super) fn run(
             state.relax(survivor);
         }
         state.push_edges_of(survivor, &mut heap, &mut neighbours);
+        // A closed hole's third corner is interior now: its edges rank by other rules.
+        if hole != NONE {
+            state.push_edges_where(hole, 0, &mut heap, &mut neighbours, |u| u != survivor);
+        }
         if with_attributes {
             for v in opposite {
                 if v != NONE && state.relax(v) {
