@@ -278,7 +278,8 @@ pub struct SimplifyArgs {
     /// Normal of the merged vertex: the paper's linear estimate or a recompute over its fan.
     #[arg(long, value_enum, default_value_t = NormalsArg::Linear)]
     pub normals: NormalsArg,
-    /// Open boundaries: preserve (slide along the border) or lock (never move).
+    /// Open boundaries: preserve (slide along the border; a hole shrunk to a triangle may close)
+    /// or lock (never move; every hole stays open).
     #[arg(long, value_enum, default_value_t = BoundaryArg::Preserve)]
     pub boundary: BoundaryArg,
     /// The same as `--boundary lock`.

@@ -89,9 +89,10 @@ pub enum NormalUpdate {
 #[serde(rename_all = "lowercase")]
 pub enum BoundaryMode {
     /// Boundary vertices may collapse along their boundary; planes perpendicular to the boundary
-    /// faces are added to their quadrics so the border keeps its shape.
+    /// faces are added to their quadrics so the border keeps its shape. A loop shrunk to three
+    /// edges (a triangular hole) may close (rule 3 of the module doc).
     Preserve,
-    /// Boundary vertices never move and are never removed.
+    /// Boundary vertices never move and are never removed: every hole stays open.
     Lock,
 }
 
