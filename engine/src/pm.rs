@@ -20,8 +20,8 @@
 //! loop of three edges, which the simplifier's last collapse of it closes) names the hole's third
 //! corner as `vl` or `vr` ([`VertexSplit::hole`]): the faces move as above, and no face is added
 //! on that side, so the hole `(vs, vt, ·)` opens again. `vs` returns to its position before the
-//! collapse, `vt` gets its own. Positions are stored as the input's `f32` values, so refining all the way gives back the
-//! input bit for bit.
+//! collapse, `vt` gets its own. Positions are stored as the input's `f32` values, so refining all
+//! the way gives back the input bit for bit.
 
 use serde::Serialize;
 
