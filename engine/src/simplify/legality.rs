@@ -125,19 +125,30 @@ pub(super) fn triangle_quality(area2: f64, a: DVec3, b: DVec3, c: DVec3) -> f64 
 }
 
 impl State<'_> {
-    /// Rules 3–6 of the module doc for a candidate, in that order: the [`Legal`] token that
-    /// [`State::collapse`] takes, or the rule that refuses it.
+    /// Rules 3–7 of the module doc for a candidate, 7 first: the [`Legal`] token that
+    /// [`State::collapse`] takes, or the first rule that refuses it.
     pub(crate) fn is_legal(&mut self, c: &Candidate) -> Result<Legal, Refusal> {
         self.check_id = self.check_id.wrapping_add(1);
         let (a, b) = (c.survivor, c.removed);
         self.prefetch_ring(a, b);
-        // Rule 3, link condition: the edge has one or two faces, and the common neighbours of its
-        // ends are exactly the opposite vertices of those faces, or those and the third corner of
-        // a triangular hole that the collapse closes.
+        // Rule 3: the edge has one or two faces.
         let (shared, shared_count) = self.edge_corners(a, b);
         if shared_count == 0 || shared_count > 2 {
             return Err(Refusal::Link);
         }
+        // Rule 7, with per-corner attributes only: no values carried across a seam. Checked before
+        // the rest of rule 3, which reads both fans in full: it is cheaper, and on textured meshes
+        // it refuses most (over half of Lantern's refusals).
+        if !self.corner_source.is_empty() {
+            let dead = [shared[0].face, if shared_count == 2 { shared[1].face } else { NONE }];
+            let sides = self.seam_sides(a, b, &dead[..shared_count]).ok_or(Refusal::Seam)?;
+            if !self.texture_keeps_orientation(b, &dead, sides) {
+                return Err(Refusal::UvFlip);
+            }
+        }
+        // Rule 3, link condition: the common neighbours of the edge's ends are exactly the
+        // opposite vertices of its faces, or those and the third corner of a triangular hole that
+        // the collapse closes.
         let opposite = [shared[0].other(b), if shared_count == 2 { shared[1].other(b) } else { NONE }];
         let stamp = self.next_stamp();
         for corner in &self.fans[a as usize] {
@@ -182,14 +193,6 @@ impl State<'_> {
         let interior = hole != NONE || (self.is_interior(a) && self.is_interior(b));
         if remaining < if interior { 3 } else { 1 } {
             return Err(Refusal::TooFewFaces);
-        }
-        // Rule 7, with per-corner attributes only: no values carried across a seam.
-        if !self.corner_source.is_empty() {
-            let dead = [shared[0].face, if shared_count == 2 { shared[1].face } else { NONE }];
-            let sides = self.seam_sides(a, b, &dead[..shared_count]).ok_or(Refusal::Seam)?;
-            if !self.texture_keeps_orientation(b, &dead, sides) {
-                return Err(Refusal::UvFlip);
-            }
         }
         // Rules 4–6 on each surviving face: normal change, needle, fold onto the face across.
         let p = to_f64(c.position);

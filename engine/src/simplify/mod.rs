@@ -67,10 +67,11 @@
 //! guarded costs, measuring ~3 candidates per collapse instead of ~12). Its price in time is in
 //! docs/benchmarks.md and its effect on the error in docs/simplify-report.md (Table 1b).
 //!
-//! ## Legality of a collapse (a, b) → a at position p, checked in this order
+//! ## Legality of a collapse (a, b) → a at position p
 //! Rules 1 and 2 are applied when an edge is ranked (an edge they forbid is never queued); rules
-//! 3–6 when a candidate reaches the top of the queue (`legality`), each refusal counted under its
-//! rule ([`SimplifyStats::refused`]).
+//! 3–7 when a candidate reaches the top of the queue (`legality`), each refusal counted under the
+//! first rule that refuses it ([`SimplifyStats::refused`]): 7 (on meshes with attributes: the
+//! cheaper check, and the one that refuses most there), then 3 to 6 in their order.
 //! ```text
 //!        vl                  vl
 //!       /  \                 |
