@@ -305,3 +305,43 @@ fn simplify_pm_and_levels_survive_arbitrary_meshes() {
     eprintln!("fuzz pipeline: seed {seed}, {iterations} meshes: {simplified} simplified, {refused} without faces");
     assert!(simplified > iterations as usize / 2);
 }
+
+#[test]
+fn holed_spheres_close_holes_validly_and_refine_back_exactly() {
+    // Closed spheres with random faces taken out (holes of every shape, some touching at a
+    // vertex), half with random per-corner values: wherever triangular holes close, the result
+    // stays edge-manifold and consistently oriented, and the progressive mesh, in memory and in
+    // both file forms, refines back to the input's faces.
+    let seed = setting("MESHLOD_FUZZ_SEED", 1);
+    let iterations = setting("MESHLOD_FUZZ_ITERATIONS", 20_000) / 100;
+    let mut rng = SplitMix64::new(seed ^ 0x401e);
+    let mut closed = 0;
+    for case in 0..iterations {
+        let mut mesh = meshlod_engine::procedural::icosphere(2 + (case % 2) as u32);
+        let keep = 3 + rng.next_u64() % 12;
+        mesh.triangles.retain(|_| !rng.next_u64().is_multiple_of(keep));
+        if case % 2 == 1 {
+            arbitrary_corner_attributes(&mut mesh, &mut rng);
+        }
+        let options = SimplifyOptions {
+            target_ratio: Some(0.5 + 0.49 * rng.next_f64()),
+            record_progressive: true,
+            ..Default::default()
+        };
+        let text = format!("{mesh:?}");
+        let out = no_panic("simplify holed", seed, case, text.as_bytes(), || simplify(&mesh, &options)).unwrap();
+        out.mesh.check().unwrap();
+        let report = meshlod_engine::validate::validate(&out.mesh);
+        assert_eq!(report.non_manifold_edges, 0, "case {case}");
+        assert_eq!(report.inconsistently_oriented_edges, 0, "case {case}");
+        closed += out.stats.holes_closed;
+        let pm = out.progressive.unwrap();
+        let full = pm.at_level(pm.levels());
+        assert_eq!(full.face_count(), mesh.face_count(), "case {case}");
+        for bytes in [encode(&pm), encode_lossless(&pm)] {
+            let back = decode(&bytes, Path::new("holed.pm")).unwrap();
+            assert_eq!(back.at_level(back.levels()).triangles, full.triangles, "case {case}");
+        }
+    }
+    assert!(closed > iterations as usize, "{closed} holes closed in {iterations} runs");
+}
