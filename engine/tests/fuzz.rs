@@ -343,5 +343,6 @@ fn holed_spheres_close_holes_validly_and_refine_back_exactly() {
             assert_eq!(back.at_level(back.levels()).triangles, full.triangles, "case {case}");
         }
     }
+    eprintln!("fuzz holed spheres: seed {seed}, {iterations} meshes: {closed} triangular holes closed, all valid");
     assert!(closed > iterations as usize, "{closed} holes closed in {iterations} runs");
 }
