@@ -100,17 +100,17 @@ impl State<'_> {
                 };
                 let on_boundary = ka == VertexKind::Boundary && kb == VertexKind::Boundary;
                 // (Checked here: a call per ranking costs a mesh without attribute quadrics ~2%.)
+                // The survivor is resolved only for the attribute quadrics: that of a moving
+                // collapse reads both fans' lengths, and when every edge is first ranked the fans
+                // of its higher end are not in cache (half of this function's time there, perf).
                 let weighted = self.wedges.is_some();
-                let appearance = |survivor: u32, p: DVec3| {
-                    if weighted { self.attribute_error(survivor, survivor ^ a ^ b, p) } else { 0.0 }
-                };
-                // The survivor of a moving collapse: [`State::survivor`], written out here (calling
-                // it from this closure cost 0.7% more instructions on the bunny, callgrind).
-                let mover_vertex = || match mover {
-                    Keep::A => a,
-                    Keep::B => b,
-                    Keep::Larger if self.fans[a as usize].len() >= self.fans[b as usize].len() => a,
-                    Keep::Larger => b,
+                let appearance = |keep: Keep, p: DVec3| {
+                    if weighted {
+                        let survivor = self.survivor(keep, a, b);
+                        self.attribute_error(survivor, survivor ^ a ^ b, p)
+                    } else {
+                        0.0
+                    }
                 };
                 let optimal = may_move && self.options.placement == Placement::Optimal;
                 if optimal
@@ -122,20 +122,20 @@ impl State<'_> {
                     // the midpoint (a nearly singular system can run far off), has the lowest
                     // error of all placements: nothing else needs evaluating.
                     let error = q.error(p);
-                    let cost = (error + appearance(mover_vertex(), p)) * factor;
+                    let cost = (error + appearance(mover, p)) * factor;
                     return Some(Choice { cost, error, keep: mover, position: p });
                 }
                 let (e_a, e_b) = (q.error(pa), q.error(pb));
                 if may_keep_a {
-                    consider(Keep::A, pa, (e_a + appearance(a, pa)) * factor, e_a);
+                    consider(Keep::A, pa, (e_a + appearance(Keep::A, pa)) * factor, e_a);
                 }
                 if may_keep_b {
-                    consider(Keep::B, pb, (e_b + appearance(b, pb)) * factor, e_b);
+                    consider(Keep::B, pb, (e_b + appearance(Keep::B, pb)) * factor, e_b);
                 }
                 if may_move && self.options.placement != Placement::Endpoint {
                     let mid = (pa + pb) * 0.5;
                     let e_mid = q.error(mid);
-                    consider(mover, mid, (e_mid + appearance(mover_vertex(), mid)) * factor, e_mid);
+                    consider(mover, mid, (e_mid + appearance(mover, mid)) * factor, e_mid);
                     if optimal && on_boundary {
                         // A boundary edge's vertex stays on the edge: the best point of the segment
                         // (the error along it is a parabola through its values at 0, ½ and 1).
@@ -144,7 +144,7 @@ impl State<'_> {
                             let t = (0.25 * (3.0 * e_a - 4.0 * e_mid + e_b) / curvature).clamp(0.0, 1.0);
                             let p = pa + (pb - pa) * t;
                             let error = q.error(p);
-                            consider(mover, p, (error + appearance(mover_vertex(), p)) * factor, error);
+                            consider(mover, p, (error + appearance(mover, p)) * factor, error);
                         }
                     }
                 }

@@ -42,7 +42,21 @@ pub(super) fn initial_queue(state: &State, edges: Vec<[u32; 2]>, faces_in: usize
     for (i, chunk) in edges.chunks(CHUNK).enumerate() {
         let ahead = edges.get((i + 1) * CHUNK..((i + 2) * CHUNK).min(edges.len())).unwrap_or_default();
         ahead.iter().for_each(|e| state.vertices[e[1] as usize].prefetch());
-        entries.extend(chunk.iter().filter_map(|&[a, b]| state.entry(a, b)));
+        // Two edges from the same lower end are ranked side by side ([`State::entry_pair`], the
+        // same keys as one at a time), in their order.
+        let mut rest = chunk;
+        while let [[a, b], tail @ ..] = rest {
+            match tail {
+                [[a2, b2], after @ ..] if a2 == a => {
+                    entries.extend(state.entry_pair(*a, [*b, *b2]).into_iter().flatten());
+                    rest = after;
+                }
+                _ => {
+                    entries.extend(state.entry(*a, *b));
+                    rest = tail;
+                }
+            }
+        }
     }
     TieredQueue::new(entries)
 }
