@@ -61,7 +61,8 @@ impl State<'_> {
     }
 
     /// [`State::entry`] of edges {v, us[0]} and {v, us[1]}: in the usual case (interior ends, a
-    /// quadric cost, optimal placement) both quadric sums are minimised side by side
+    /// quadric cost, optimal placement, not one end on a seam and the other off it, which
+    /// [`State::choose`] keeps in place) both quadric sums are minimised side by side
     /// ([`QuadricPair`]); an edge outside it, or whose minimiser is refused, is ranked alone. The
     /// same keys to the bit: the pair performs the scalar operations lane by lane, and the sums,
     /// the midpoint, the squared edge length and the normals' dot product do not depend on which
@@ -75,7 +76,11 @@ impl State<'_> {
             && self.options.placement == Placement::Optimal
             && self.wedges.is_none();
         let interior = quadric_cost & (vv.kind == VertexKind::Interior);
-        let usual = [interior & (v0.kind == VertexKind::Interior), interior & (v1.kind == VertexKind::Interior)];
+        let free = |u: u32| self.on_seam.is_empty() || self.on_seam[v as usize] == self.on_seam[u as usize];
+        let usual = [
+            interior & (v0.kind == VertexKind::Interior) && free(us[0]),
+            interior & (v1.kind == VertexKind::Interior) && free(us[1]),
+        ];
         if !(usual[0] || usual[1]) {
             return [self.entry(v, us[0]), self.entry(v, us[1])];
         }
@@ -122,5 +127,48 @@ impl State<'_> {
     #[inline]
     pub(super) fn stamp(&self, a: u32, b: u32) -> u32 {
         self.version[a as usize].wrapping_add(self.version[b as usize])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::kernel::State;
+    use super::super::{Placement, SimplifyOptions};
+    use crate::procedural;
+
+    /// Every pair of edges from one vertex, ranked side by side, gets the keys each gets alone: on
+    /// a smooth blob, and on the same blob whose upper and lower halves carry different normals
+    /// (a seam round its middle, where an edge from a seam vertex to one off the seam keeps the
+    /// seam end in place).
+    #[test]
+    fn ranking_two_edges_side_by_side_gives_the_keys_of_one_at_a_time() {
+        let blob = procedural::bumpy_blob(12, 20, 4);
+        let mut halves = blob.clone();
+        let normals = (0..halves.face_count())
+            .flat_map(|f| {
+                let upper = halves.triangle_points(f).iter().map(|p| p.z).sum::<f64>() > 0.0;
+                [[0.0, 0.0, if upper { 1.0 } else { -1.0 }]; 3]
+            })
+            .collect();
+        halves.corners.normals = Some(normals);
+        // (As `simplify` resolves `Auto` for a mesh without texture coordinates.)
+        let options = SimplifyOptions { placement: Placement::Optimal, ..Default::default() };
+        let mut seam_pairs = 0;
+        for (name, mesh) in [("blob", blob), ("two-chart blob", halves)] {
+            let (mut state, _) = State::new(&mesh, &options);
+            state.carry_attributes(&mesh);
+            let mut ring = Vec::new();
+            for v in 0..mesh.vertex_count() as u32 {
+                state.neighbours(v, &mut ring);
+                for pair in ring.windows(2) {
+                    let together = state.entry_pair(v, [pair[0], pair[1]]);
+                    let alone = [state.entry(v, pair[0]), state.entry(v, pair[1])];
+                    assert_eq!(together, alone, "{name}: vertex {v}, neighbours {pair:?}");
+                    let on_seam = |u: u32| state.on_seam.get(u as usize).copied().unwrap_or(false);
+                    seam_pairs += pair.iter().any(|&u| on_seam(u) != on_seam(v)) as usize;
+                }
+            }
+        }
+        assert!(seam_pairs > 0, "edges from a seam vertex to one off the seam were ranked");
     }
 }
