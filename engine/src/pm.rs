@@ -151,9 +151,15 @@ pub enum Hole {
     Right,
 }
 
+/// Whether a split with these third corners adds its face `(vs, vt, vl)` and its face
+/// `(vt, vs, vr)`.
+fn sides_added(vl: u32, vr: u32, hole: Hole) -> [bool; 2] {
+    [vl != NO_VERTEX && hole != Hole::Left, vr != NO_VERTEX && hole != Hole::Right]
+}
+
 /// Number of faces a split with these third corners adds.
 pub(crate) fn faces_added(vl: u32, vr: u32, hole: Hole) -> usize {
-    (vl != NO_VERTEX) as usize + (vr != NO_VERTEX) as usize - (hole != Hole::None) as usize
+    sides_added(vl, vr, hole).into_iter().filter(|&added| added).count()
 }
 
 /// One vertex split (the inverse of one edge collapse).
@@ -562,11 +568,7 @@ impl Fans {
             self.vertex_faces[vt as usize].push(f);
         }
         let mut next_face = next_face;
-        let faces = [
-            (vl != NO_VERTEX && hole != Hole::Left, [vs, vt, vl]),
-            (vr != NO_VERTEX && hole != Hole::Right, [vt, vs, vr]),
-        ];
-        for (present, t) in faces {
+        for (present, t) in sides_added(vl, vr, hole).into_iter().zip([[vs, vt, vl], [vt, vs, vr]]) {
             if present {
                 self.triangles[next_face as usize] = t;
                 for v in t {

@@ -151,6 +151,25 @@ pub fn sharp_box(n: u32) -> Mesh {
     to_mesh(points, triangles)
 }
 
+/// `mesh` with faces taken out to make triangular holes: of every `every`-th face (`every` ≥ 1),
+/// each that shares no vertex with a face taken out before, so that every hole is a boundary loop
+/// of three edges whose vertices are on no other boundary (each keeps one open fan). For the
+/// hole-closing collapses of the simplifier, in tests and examples.
+pub fn with_triangular_holes(mesh: &Mesh, every: usize) -> Mesh {
+    let every = every.max(1);
+    let mut used = vec![false; mesh.vertex_count()];
+    let mut out = mesh.clone();
+    out.triangles.clear();
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        if f % every == 0 && t.iter().all(|&v| !used[v as usize]) {
+            t.iter().for_each(|&v| used[v as usize] = true);
+        } else {
+            out.triangles.push(*t);
+        }
+    }
+    out
+}
+
 /// Deterministic value noise in [-1, 1] from an integer lattice hash, smoothly interpolated.
 fn value_noise(x: f64, y: f64, seed: u64) -> f64 {
     let hash = |i: i64, j: i64| {

@@ -57,14 +57,9 @@ fn corpus() -> Vec<(PathBuf, Vec<u8>)> {
     let plain = meshlod_engine::procedural::icosphere(2);
     let pm = meshlod_engine::simplify::simplify(&plain, &options).unwrap().progressive.unwrap();
     files.push((dir.join("generated-sphere.pm"), encode(&pm)));
-    // And one whose splits open triangular holes again (every fifth face taken out of a sphere,
-    // simplified until holes close), in both forms.
-    let mut holed = meshlod_engine::procedural::icosphere(2);
-    let mut k = 0;
-    holed.triangles.retain(|_| {
-        k += 1;
-        k % 5 != 0
-    });
+    // And one whose splits open triangular holes again (a sphere with holes, simplified until
+    // they close), in both forms.
+    let holed = meshlod_engine::procedural::with_triangular_holes(&meshlod_engine::procedural::icosphere(2), 5);
     let options = SimplifyOptions { target_ratio: Some(0.9), ..options };
     let pm = meshlod_engine::simplify::simplify(&holed, &options).unwrap().progressive.unwrap();
     assert!(pm.splits().iter().any(|s| s.hole != meshlod_engine::pm::Hole::None));

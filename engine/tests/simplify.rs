@@ -270,25 +270,9 @@ fn pm_file_round_trips_and_refuses_corruption() {
     }
 }
 
-/// `mesh` with faces taken out, each sharing no vertex with another taken out: every one leaves a
-/// triangular hole whose three vertices are on no other boundary.
-fn with_triangular_holes(mesh: &Mesh, every: usize) -> Mesh {
-    let mut used = vec![false; mesh.vertex_count()];
-    let mut out = mesh.clone();
-    out.triangles.clear();
-    for (f, t) in mesh.triangles.iter().enumerate() {
-        if f % every == 0 && t.iter().all(|&v| !used[v as usize]) {
-            t.iter().for_each(|&v| used[v as usize] = true);
-        } else {
-            out.triangles.push(*t);
-        }
-    }
-    out
-}
-
 #[test]
 fn triangular_holes_close_and_their_splits_open_them_again_in_every_form() {
-    let mesh = with_triangular_holes(&procedural::bumpy_blob(24, 40, 9), 23);
+    let mesh = procedural::with_triangular_holes(&procedural::bumpy_blob(24, 40, 9), 23);
     let loops = validate(&mesh).boundary_loops;
     assert!(loops >= 30, "{loops} holes");
     let out = simplify(&mesh, &options(0.95)).unwrap();

@@ -458,16 +458,9 @@ mod tests {
         // A sphere with faces taken out (a triangular hole each), simplified until holes close:
         // the contract carries which side is the hole's, and the rebuilt mesh matches at every
         // level.
+        use meshlod_engine::procedural::{icosphere, with_triangular_holes};
         use meshlod_engine::simplify::{SimplifyOptions, simplify};
-        let mut mesh = meshlod_engine::procedural::icosphere(3);
-        let mut used = vec![false; mesh.vertex_count()];
-        mesh.triangles.retain(|t| {
-            let keep = t.iter().any(|&v| used[v as usize]);
-            if !keep {
-                t.iter().for_each(|&v| used[v as usize] = true);
-            }
-            keep
-        });
+        let mesh = with_triangular_holes(&icosphere(3), 1);
         let options = SimplifyOptions { target_ratio: Some(0.95), record_progressive: true, ..Default::default() };
         let pm = simplify(&mesh, &options).unwrap().progressive.unwrap();
         assert!(pm.splits().iter().any(|s| s.hole != Hole::None));
