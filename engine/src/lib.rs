@@ -14,6 +14,7 @@ pub mod features;
 pub mod hausdorff;
 pub mod io;
 pub mod mesh;
+mod parallel;
 pub mod pm;
 pub mod pm_format;
 mod prefetch;

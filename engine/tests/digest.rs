@@ -134,3 +134,29 @@ fn outputs_match_the_recorded_digests() {
     // Shared-mesh cases are only computed where the meshes are (and CI fails without them).
     assert!(got.len() >= 5 * 11, "too few cases computed: {}", got.len());
 }
+
+/// The simplifier's setup runs on the rayon pool (the fans, the classes, the first ranking of the
+/// edges, the outputs): its output must not depend on how many threads the pool has. Meshes large
+/// enough for several blocks of every parallel pass, with borders (terrain), holes that close, and
+/// planar faces whose collapses tie (the box: there the order of the queue's entries decides).
+#[test]
+fn outputs_do_not_depend_on_the_thread_count() {
+    let blob = procedural::bumpy_blob(160, 240, 7);
+    let meshes = [
+        ("blob", blob.clone()),
+        ("holed blob", procedural::with_triangular_holes(&blob, 40)),
+        ("terrain", procedural::terrain(160, 3)),
+        ("box", procedural::sharp_box(80)),
+    ];
+    let options = SimplifyOptions { target_ratio: Some(0.95), ..Default::default() };
+    for (name, mesh) in &meshes {
+        assert!(mesh.vertex_count() > 3 * 8192, "{name}: {} vertices", mesh.vertex_count());
+        let digests: Vec<String> = [1, 2, 3]
+            .map(|threads| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                pool.install(|| simplify_digest(mesh, &options))
+            })
+            .into();
+        assert!(digests.iter().all(|d| *d == digests[0]), "{name}: {digests:?}");
+    }
+}

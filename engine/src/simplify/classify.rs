@@ -98,11 +98,30 @@ pub(super) struct Scan {
 /// vertex looks only at its own fan (both ends of an edge see the same faces, so they agree).
 /// Fans of the usual size are scanned by counting ([`scan_small_fan`]); a hub vertex by sorting
 /// ([`scan_large_fan`]), so that the time stays O(valence · log valence).
+///
+/// Blocks of vertices may be scanned side by side ([`crate::parallel`]); their finds are joined in
+/// vertex order: the same lists as one pass.
 pub(super) fn scan_fans(fans: &[FanSlot]) -> Scan {
+    const BLOCK: usize = 8192;
+    let blocks = crate::parallel::map_blocks(fans, BLOCK, |i, block| scan_block(block, (i * BLOCK) as u32));
+    let mut scan = Scan {
+        kind: Vec::with_capacity(fans.len()),
+        edges: Vec::with_capacity(blocks.iter().map(|b| b.edges.len()).sum()),
+        boundary_edges: Vec::new(),
+    };
+    for block in blocks {
+        scan.kind.extend(block.kind);
+        scan.edges.extend(block.edges);
+        scan.boundary_edges.extend(block.boundary_edges);
+    }
+    scan
+}
+
+/// [`scan_fans`] over the fans of vertices `first..`.
+fn scan_block(fans: &[FanSlot], first: u32) -> Scan {
     let mut scan = Scan { kind: Vec::with_capacity(fans.len()), edges: Vec::new(), boundary_edges: Vec::new() };
     let mut scratch = LargeFanScratch::default();
-    for (v, fan) in fans.iter().enumerate() {
-        let v = v as u32;
+    for (v, fan) in (first..).zip(fans) {
         let closed = fan.inline_slots().and_then(|slots| scan_closed_fan(v, slots, fan.len(), &mut scan));
         let kind = match (closed, fan.len()) {
             (Some(kind), _) => kind,

@@ -112,6 +112,61 @@ impl VertexData {
     }
 }
 
+/// The passes over the faces below write to their corners' fans and blocks, in the input's vertex
+/// order, which can be far from its face order: each asks for the data of the face `AHEAD` places
+/// on while it works on this one.
+const AHEAD: usize = 8;
+
+/// The faces around each vertex, in face order.
+fn build_fans(mesh: &Mesh) -> Vec<FanSlot> {
+    let mut fans = vec![FanSlot::default(); mesh.vertex_count()];
+    for (f, &[x, y, z]) in mesh.triangles.iter().enumerate() {
+        if let Some(t) = mesh.triangles.get(f + AHEAD) {
+            t.iter().for_each(|&v| fans[v as usize].prefetch());
+        }
+        let face = f as u32;
+        fans[x as usize].push(Corner { face, next: y, prev: z });
+        fans[y as usize].push(Corner { face, next: z, prev: x });
+        fans[z as usize].push(Corner { face, next: x, prev: y });
+    }
+    fans
+}
+
+/// Each vertex's block with its position, its area-weighted quadric of the planes of its faces and
+/// the sum of their unit normals (Gouraud, not yet normalised), summed in face order; and each
+/// face's unit normal for the normal cones: NaN where the face is too poor for a cone (NaN makes
+/// the cone unusable).
+fn face_pass(mesh: &Mesh) -> (Vec<VertexData>, Vec<DVec3>) {
+    let mut vertices: Vec<VertexData> =
+        mesh.positions.iter().map(|&position| VertexData { position, ..Default::default() }).collect();
+    let mut face_units = Vec::with_capacity(mesh.face_count());
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        if let Some(t) = mesh.triangles.get(f + AHEAD) {
+            t.iter().for_each(|&v| vertices[v as usize].prefetch());
+        }
+        let [pa, pb, pc] = mesh.triangle_points(f);
+        let n = (pb - pa).cross(pc - pa);
+        let area = 0.5 * n.length();
+        if area == 0.0 {
+            face_units.push(DVec3::NAN);
+            continue;
+        }
+        let unit = n / (2.0 * area);
+        let usable = triangle_quality(2.0 * area, pa, pb, pc) >= CONE_MIN_QUALITY;
+        face_units.push(if usable { unit } else { DVec3::NAN });
+        // `n.normalize()` rather than `unit` (equal up to the last bit): the collapse order, and
+        // so the documented figures, follow these exact bits (docs/simplify-report.md,
+        // sensitivity; engine/tests/digest.rs holds them).
+        let q = Quadric::from_plane(n.normalize(), pa, area);
+        for &v in t {
+            let vertex = &mut vertices[v as usize];
+            vertex.quadric += q;
+            vertex.normal += unit;
+        }
+    }
+    (vertices, face_units)
+}
+
 #[inline]
 pub(super) fn to_f64(p: [f32; 3]) -> DVec3 {
     DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
@@ -134,30 +189,35 @@ impl<'o> State<'o> {
     /// `track`) leaving it empty until [`State::rebuild_triangles`].
     pub(crate) fn with_tracking(mesh: &Mesh, options: &'o SimplifyOptions, track: bool) -> (State<'o>, Vec<[u32; 2]>) {
         let vertex_count = mesh.vertex_count();
-        // The passes over the faces below write to their corners' fans and blocks, in the input's
-        // vertex order, which can be far from its face order: each asks for the data of the face
-        // `AHEAD` places on while it works on this one.
-        const AHEAD: usize = 8;
-        let mut fans = vec![FanSlot::default(); vertex_count];
-        for (f, &[x, y, z]) in mesh.triangles.iter().enumerate() {
-            if let Some(t) = mesh.triangles.get(f + AHEAD) {
-                t.iter().for_each(|&v| fans[v as usize].prefetch());
-            }
-            let face = f as u32;
-            fans[x as usize].push(Corner { face, next: y, prev: z });
-            fans[y as usize].push(Corner { face, next: z, prev: x });
-            fans[z as usize].push(Corner { face, next: x, prev: y });
+        // Two passes over the faces that need nothing of each other, side by side where the pool
+        // has threads for them (`crate::parallel`): the fans and their scan (classes and edges),
+        // and the quadrics and normals.
+        let ((fans, Scan { kind, edges, boundary_edges }), (mut vertices, face_units)) = crate::parallel::join(
+            || {
+                let fans = build_fans(mesh);
+                let scan = scan_fans(&fans);
+                (fans, scan)
+            },
+            || face_pass(mesh),
+        );
+        let lock = options.boundary == BoundaryMode::Lock;
+        for (vertex, kind) in vertices.iter_mut().zip(kind) {
+            vertex.kind = match kind {
+                VertexKind::Boundary if lock => VertexKind::Anchored,
+                kind => kind,
+            };
+            vertex.normal = vertex.normal.normalize_or_zero();
         }
-        let Scan { kind, edges, boundary_edges } = scan_fans(&fans);
-
+        // Each vertex's normal cone takes in the unit normals of its faces (the cones need every
+        // vertex normal first).
+        for (vertex, fan) in vertices.iter_mut().zip(&fans) {
+            for corner in fan {
+                vertex.cone.widen(vertex.normal, face_units[corner.face as usize]);
+            }
+        }
         let mut state = State {
             options,
-            vertices: mesh
-                .positions
-                .iter()
-                .zip(kind)
-                .map(|(&position, kind)| VertexData { position, kind, ..Default::default() })
-                .collect(),
+            vertices,
             triangles: if track { mesh.triangles.clone() } else { Vec::new() },
             track_triangles: track,
             face_alive: vec![true; mesh.face_count()],
@@ -188,54 +248,6 @@ impl<'o> State<'o> {
         };
         if options.guard > 0.0 {
             state.guard = DistanceGuard::new(mesh, &state.fans);
-        }
-        if options.boundary == BoundaryMode::Lock {
-            for vertex in state.vertices.iter_mut() {
-                if vertex.kind == VertexKind::Boundary {
-                    vertex.kind = VertexKind::Anchored;
-                }
-            }
-        }
-        // Quadrics: area-weighted face planes, plus boundary planes perpendicular to boundary faces.
-        // Vertex normals (Gouraud: the mean of the unit normals of the faces around) gathered in the
-        // same pass, and each face's unit normal kept for the normal cones, which need the vertex
-        // normals first: NaN where the face is too poor for a cone (NaN makes the cone unusable).
-        let mut face_units = Vec::with_capacity(mesh.face_count());
-        for (f, t) in mesh.triangles.iter().enumerate() {
-            if let Some(t) = mesh.triangles.get(f + AHEAD) {
-                t.iter().for_each(|&v| state.vertices[v as usize].prefetch());
-            }
-            let [pa, pb, pc] = mesh.triangle_points(f);
-            let n = (pb - pa).cross(pc - pa);
-            let area = 0.5 * n.length();
-            if area == 0.0 {
-                face_units.push(DVec3::NAN);
-                continue;
-            }
-            let unit = n / (2.0 * area);
-            let usable = triangle_quality(2.0 * area, pa, pb, pc) >= CONE_MIN_QUALITY;
-            face_units.push(if usable { unit } else { DVec3::NAN });
-            // `n.normalize()` rather than `unit` (equal up to the last bit): the collapse order,
-            // and so the documented figures, follow these exact bits (docs/simplify-report.md,
-            // sensitivity; engine/tests/digest.rs holds them).
-            let q = Quadric::from_plane(n.normalize(), pa, area);
-            for &v in t {
-                let vertex = &mut state.vertices[v as usize];
-                vertex.quadric += q;
-                vertex.normal += unit;
-            }
-        }
-        for vertex in state.vertices.iter_mut() {
-            vertex.normal = vertex.normal.normalize_or_zero();
-        }
-        for (f, (t, &unit)) in mesh.triangles.iter().zip(&face_units).enumerate() {
-            if let Some(t) = mesh.triangles.get(f + AHEAD) {
-                t.iter().for_each(|&v| prefetch(&state.vertices[v as usize].normal));
-            }
-            for &v in t {
-                let vertex = &mut state.vertices[v as usize];
-                vertex.cone.widen(vertex.normal, unit);
-            }
         }
         for &(a, b, f) in &boundary_edges {
             state.add_edge_plane(mesh, f as usize, a, b, BOUNDARY_WEIGHT);

@@ -193,23 +193,29 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     // 6. Outputs. The guard's tree and tables are done with: their memory goes back first.
     state.guard = None;
     state.rebuild_triangles(&prepared, &run.log);
-    let simplified = state.output_mesh();
-    let progressive = options.record_progressive.then(|| {
-        ProgressiveMesh::from_log(
-            &prepared,
-            &input_vertex,
-            |v| state.vertices[v as usize].position,
-            &state.triangles,
-            &state.face_alive,
-            &run.log,
-            (!state.corner_source.is_empty()).then(|| crate::pm::AttributeLog {
-                values: &state.attributes,
-                corner_source: &state.corner_source,
-                journal: &state.journal,
-                journal_ends: &state.journal_ends,
-            }),
-        )
-    });
+    // The output mesh and the progressive mesh read the state only: built side by side where the
+    // pool has threads for them.
+    let (simplified, progressive) = crate::parallel::join(
+        || state.output_mesh(),
+        || {
+            options.record_progressive.then(|| {
+                ProgressiveMesh::from_log(
+                    &prepared,
+                    &input_vertex,
+                    |v| state.vertices[v as usize].position,
+                    &state.triangles,
+                    &state.face_alive,
+                    &run.log,
+                    (!state.corner_source.is_empty()).then(|| crate::pm::AttributeLog {
+                        values: &state.attributes,
+                        corner_source: &state.corner_source,
+                        journal: &state.journal,
+                        journal_ends: &state.journal_ends,
+                    }),
+                )
+            })
+        },
+    );
     let frozen_vertices =
         state.vertices.iter().filter(|v| matches!(v.kind, VertexKind::Frozen | VertexKind::Anchored)).count();
     let stats = SimplifyStats {

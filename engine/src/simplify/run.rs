@@ -31,14 +31,29 @@ pub(super) struct Run {
 }
 
 /// The queue of every edge of the fresh state, heapified once (linear) rather than pushed edge by
-/// edge.
+/// edge. Blocks of [`RANK_BLOCK`] edges may be ranked side by side ([`crate::parallel`]); the
+/// entries come in the order of one pass, so the queue (and the run) is the same on any number of
+/// threads.
 pub(super) fn initial_queue(state: &State, edges: Vec<[u32; 2]>, faces_in: usize) -> TieredQueue {
-    // The edges come sorted by their lower end, so the higher end's block is the one not in cache:
-    // those of the next chunk are asked for while this one is ranked.
-    const CHUNK: usize = 16;
     // Room for the queue's growth to its sweep bound (2 entries per face, in `run`) from the
     // start: growing it later copies every entry into freshly faulted pages.
     let mut entries = Vec::with_capacity(edges.len().max(2 * faces_in + 16));
+    for block in crate::parallel::map_blocks(&edges, RANK_BLOCK, |_, block| rank_block(state, block)) {
+        entries.extend(block);
+    }
+    TieredQueue::new(entries)
+}
+
+/// Edges ranked by one block of [`initial_queue`]: enough that handing it to another thread costs
+/// nothing beside it, few enough that both threads get work on a small mesh.
+const RANK_BLOCK: usize = 4096;
+
+/// The entries of `edges` (sorted by their lower end), in their order.
+fn rank_block(state: &State, edges: &[[u32; 2]]) -> Vec<QueueEntry> {
+    // The higher end's block is the one not in cache: those of the next chunk are asked for while
+    // this one is ranked.
+    const CHUNK: usize = 16;
+    let mut entries = Vec::with_capacity(edges.len());
     for (i, chunk) in edges.chunks(CHUNK).enumerate() {
         let ahead = edges.get((i + 1) * CHUNK..((i + 2) * CHUNK).min(edges.len())).unwrap_or_default();
         ahead.iter().for_each(|e| state.vertices[e[1] as usize].prefetch());
@@ -58,7 +73,7 @@ pub(super) fn initial_queue(state: &State, edges: Vec<[u32; 2]>, faces_in: usize
             }
         }
     }
-    TieredQueue::new(entries)
+    entries
 }
 
 /// Collapses until `target` faces remain (of `faces_in`), the next collapse would exceed the
