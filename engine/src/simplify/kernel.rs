@@ -193,6 +193,7 @@ impl<'o> State<'o> {
         // has threads for them (`crate::parallel`): the fans and their scan (classes and edges),
         // and the quadrics and normals.
         let ((fans, Scan { kind, edges, boundary_edges }), (mut vertices, face_units)) = crate::parallel::join(
+            mesh.face_count(),
             || {
                 let fans = build_fans(mesh);
                 let scan = scan_fans(&fans);

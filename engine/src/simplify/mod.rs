@@ -196,6 +196,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     // The output mesh and the progressive mesh read the state only: built side by side where the
     // pool has threads for them.
     let (simplified, progressive) = crate::parallel::join(
+        faces_in,
         || state.output_mesh(),
         || {
             options.record_progressive.then(|| {
