@@ -4,7 +4,9 @@
 //! unreferenced ones (so `v` counts and cross-object sharing are lost) and reports errors without
 //! line numbers. This reader keeps the file's global vertex numbering (welded position indices),
 //! supports `v/vt/vn` corners and negative (relative) indices, triangulates polygons, and keeps
-//! texture coordinates and normals per corner when every face has them.
+//! texture coordinates and normals per corner when every face has them. With those (or materials),
+//! vertices at bit-identical positions are joined ([`Mesh::weld_positions`]), as the glTF and PLY
+//! readers join them: the first keeps its number.
 
 use std::collections::HashMap;
 use std::io::Write;
@@ -238,7 +240,13 @@ pub fn read_obj(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadL
         corners.materials = Some(triangle_materials.iter().flat_map(|&m| [m; 3]).collect());
         corners.library = Some(std::sync::Arc::new(super::mtl::library(&material_names, &libraries, folder)));
     }
-    let mesh = Mesh { positions, triangles, corners };
+    let mut mesh = Mesh { positions, triangles, corners };
+    if !mesh.corners.is_empty() {
+        // Exporters that write one `v` per combination of values (trimesh, as glTF and PLY store
+        // them) cut the surface open along every seam: joined back, a seam is a seam, which the
+        // simplifier moves both sides of together, not two borders it would move apart (a crack).
+        mesh.weld_positions();
+    }
     debug_assert!(mesh.check().is_ok());
     Ok(mesh)
 }

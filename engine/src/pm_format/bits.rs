@@ -32,6 +32,15 @@ impl BitWriter {
         self.put(bit as u64, 1);
     }
 
+    /// `n` one bits (a unary count), however many: [`BitWriter::put`] takes at most 64 at once.
+    pub fn ones(&mut self, mut n: usize) {
+        while n > 0 {
+            let take = n.min(32);
+            self.put((1u64 << take) - 1, take as u32);
+            n -= take;
+        }
+    }
+
     /// The bytes written; the last one padded with zeros.
     pub fn finish(self) -> Vec<u8> {
         self.bytes

@@ -364,11 +364,11 @@ impl AttributeState {
     fn put(&mut self, w: &mut BitWriter, value: Vec<i64>) -> u32 {
         let m = self.list.len();
         if let Some(i) = self.list.iter().position(|&c| self.table[c as usize] == value) {
-            w.put((1u64 << i) - 1, i as u32);
+            w.ones(i);
             w.bit(false);
             return self.list[i];
         }
-        w.put((1u64 << m) - 1, m as u32);
+        w.ones(m);
         if let Some(&t) = self.index.get(&value) {
             w.bit(true);
             w.put(t as u64, width_for(self.table.len() as u64));
