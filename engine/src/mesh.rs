@@ -377,7 +377,7 @@ impl CornerAttributes {
         }
         // One output vertex per corner that is the first of its vertex with its values, in the
         // mesh's vertex order (a vertex's copies in the order its corners first use them), so that a
-        // reader joining the copies again (`Mesh::weld_positions`) numbers the vertices as they
+        // reader joining the copies again (`Mesh::join_cut_seams`) numbers the vertices as they
         // were: a mesh written and read back simplifies as it did before.
         let ids = self.row_ids(triangles, vertex_count, by_material);
         let vertex_of = |k: usize| triangles[k / 3][k % 3];
@@ -557,31 +557,6 @@ impl Mesh {
             }
         }
         self.corners.check(3 * self.triangles.len())
-    }
-
-    /// Joins vertices at bit-identical positions (−0 and +0 alike) into one, keeping the first
-    /// one's place: formats with one attribute value per vertex (glTF, PLY) split a vertex along
-    /// every texture seam and hard edge, which would leave the surface cut open there. The
-    /// per-corner attributes are untouched, so a seam stays a seam (an edge whose faces differ in
-    /// their corners) rather than a border. Returns the number of vertices joined away.
-    pub fn weld_positions(&mut self) -> usize {
-        let mut first: std::collections::HashMap<[u32; 3], u32> = std::collections::HashMap::new();
-        let mut positions = Vec::with_capacity(self.positions.len());
-        let remap: Vec<u32> = self
-            .positions
-            .iter()
-            .map(|p| {
-                let key = p.map(|c| (c + 0.0).to_bits());
-                *first.entry(key).or_insert_with(|| {
-                    positions.push(*p);
-                    positions.len() as u32 - 1
-                })
-            })
-            .collect();
-        let joined = self.positions.len() - positions.len();
-        self.positions = positions;
-        self.triangles.iter_mut().for_each(|t| *t = t.map(|v| remap[v as usize]));
-        joined
     }
 
     /// Number of vertices (including unreferenced ones).

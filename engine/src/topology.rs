@@ -137,3 +137,160 @@ impl UnionFind {
         true
     }
 }
+
+impl Mesh {
+    /// Joins what a vertex-per-set-of-values layout (glTF, PLY, many OBJ exporters) cuts open: a
+    /// seam arrives as two borders at the same positions, one running each way. Two border edges
+    /// are zipped where they are the only ones between a pair of bit-identical positions (−0 and +0
+    /// alike) and run opposite ways, as the two sides of a cut do; a border edge of zero length
+    /// (a UV sphere's pole, one vertex per face) joins its two ends. Each joined edge then has two
+    /// faces that agree on its direction, so the surface is one piece with seams (an edge whose
+    /// faces differ in their corners' values) rather than two borders that the simplifier would
+    /// move apart. Vertices that merely coincide — two sheets of a double-sided garment, parts
+    /// that touch — stay apart: joined, they would make edges of three or more faces, or faces
+    /// that disagree on direction. A vertex that no face uses joins one at its position.
+    /// The first vertex of each joined set keeps its place (the others' positions are dropped,
+    /// the order kept); per-corner attributes are untouched.
+    /// Returns the number of vertices joined away.
+    pub fn join_cut_seams(&mut self) -> usize {
+        use std::collections::HashMap;
+        let key = |v: u32| self.positions[v as usize].map(|c| (c + 0.0).to_bits());
+        let mut faces_at: HashMap<[u32; 2], u32> = HashMap::with_capacity(3 * self.triangles.len() / 2);
+        let directed =
+            || self.triangles.iter().flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]]).filter(|[a, b]| a != b);
+        for [a, b] in directed() {
+            *faces_at.entry([a.min(b), a.max(b)]).or_insert(0) += 1;
+        }
+        let mut sets = UnionFind::new(self.positions.len());
+        // Border edges between distinct positions, by the (unordered) pair of positions.
+        let mut along: HashMap<[[u32; 3]; 2], Vec<[u32; 2]>> = HashMap::new();
+        for [a, b] in directed().filter(|[a, b]| faces_at[&[*a.min(b), *a.max(b)]] == 1) {
+            let (pa, pb) = (key(a), key(b));
+            if pa == pb {
+                sets.union(a, b);
+            } else {
+                along.entry([pa.min(pb), pa.max(pb)]).or_default().push([a, b]);
+            }
+        }
+        for edges in along.values() {
+            if let [[a, b], [c, d]] = edges[..]
+                && key(a) == key(d)
+                && key(b) == key(c)
+            {
+                sets.union(a, d);
+                sets.union(b, c);
+            }
+        }
+        // A vertex that no face uses (a glTF primitive's share of a vertex buffer that several
+        // use) joins a vertex at its position: it has no faces to disagree.
+        let n = self.positions.len();
+        let mut used = vec![false; n];
+        self.triangles.iter().flatten().for_each(|&v| used[v as usize] = true);
+        // (The first used vertex at the position, else the first at all.)
+        let mut first_at: HashMap<[u32; 3], u32> = HashMap::new();
+        for v in (0..n as u32).filter(|&v| used[v as usize]).chain((0..n as u32).filter(|&v| !used[v as usize])) {
+            let at = *first_at.entry(key(v)).or_insert(v);
+            if !used[v as usize] {
+                sets.union(v, at);
+            }
+        }
+        let mut first = vec![u32::MAX; n];
+        let mut remap = vec![0u32; n];
+        let mut positions = Vec::with_capacity(n);
+        for v in 0..n as u32 {
+            let root = sets.find(v) as usize;
+            if first[root] == u32::MAX {
+                first[root] = positions.len() as u32;
+                positions.push(self.positions[v as usize]);
+            }
+            remap[v as usize] = first[root];
+        }
+        let joined = n - positions.len();
+        self.positions = positions;
+        self.triangles.iter_mut().for_each(|t| *t = t.map(|v| remap[v as usize]));
+        joined
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::mesh::Mesh;
+    use crate::validate::validate;
+
+    /// A strip of `n` quads along x, each split in two; `cut` gives the faces right of x = 1 their
+    /// own copies of the vertices on that line (a seam cut open, as a vertex-per-value file has it).
+    fn strip(n: u32, cut: bool) -> Mesh {
+        let mut positions = Vec::new();
+        for x in 0..=n {
+            positions.extend([[x as f32, 0.0, 0.0], [x as f32, 1.0, 0.0]]);
+        }
+        let copies = positions.len() as u32;
+        if cut {
+            positions.extend([[1.0, 0.0, 0.0], [1.0, 1.0, 0.0]]);
+        }
+        let at = |x: u32, y: u32, right: bool| if cut && x == 1 && right { copies + y } else { 2 * x + y };
+        let triangles = (0..n)
+            .flat_map(|x| {
+                let right = x >= 1;
+                let [a, b, c, d] = [at(x, 0, right), at(x + 1, 0, false), at(x + 1, 1, false), at(x, 1, right)];
+                [[a, b, c], [a, c, d]]
+            })
+            .collect();
+        Mesh::new(positions, triangles).unwrap()
+    }
+
+    #[test]
+    fn a_cut_seam_is_joined_and_coincident_parts_are_not() {
+        let whole = strip(3, false);
+        let mut cut = strip(3, true);
+        assert_eq!(validate(&cut).boundary_edges, validate(&whole).boundary_edges + 2);
+        assert_eq!(cut.join_cut_seams(), 2);
+        assert_eq!((cut.positions.clone(), cut.triangles.clone()), (whole.positions.clone(), whole.triangles.clone()));
+        // A copy of the strip lying on it, facing the same way: its borders run the same ways as the
+        // strip's, so nothing is joined (joined, every edge would have two faces one way).
+        let mut stacked = whole.clone();
+        let offset = whole.vertex_count() as u32;
+        stacked.positions.extend(whole.positions.clone());
+        stacked.triangles.extend(whole.triangles.iter().map(|t| t.map(|v| v + offset)));
+        assert_eq!(stacked.join_cut_seams(), 0);
+        // Facing the other way, its rim is the other side of the strip's: a closed flat shell.
+        let mut shell = stacked.clone();
+        for t in &mut shell.triangles[whole.face_count()..] {
+            t.swap(1, 2);
+        }
+        assert_eq!(shell.join_cut_seams(), whole.vertex_count());
+        let report = validate(&shell);
+        assert_eq!((report.boundary_edges, report.inconsistently_oriented_edges), (0, 0));
+        // Three borders between the same two positions: which two are one edge is not known.
+        let mut three = strip(1, false);
+        three.positions.extend([[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [-1.0, 0.5, 0.0]]);
+        three.positions.extend([[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [-1.0, 0.5, 1.0]]);
+        three.triangles.extend([[4, 6, 5], [7, 9, 8]]);
+        assert_eq!(three.join_cut_seams(), 0);
+    }
+
+    #[test]
+    fn a_pole_of_copies_and_unused_copies_are_joined() {
+        // A fan around the origin whose every face has its own copy of the centre, as a UV
+        // sphere's pole comes: border edges of zero length between the copies' faces.
+        let n = 6;
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        for k in 0..n {
+            let angle = std::f32::consts::TAU * k as f32 / n as f32;
+            positions.push([angle.cos(), angle.sin(), 0.0]);
+        }
+        for k in 0..n {
+            positions.push([0.0, 0.0, 0.0]);
+            // The face of the copy k, and a sliver of zero area joining it to the next copy.
+            triangles.push([n + k, k, (k + 1) % n]);
+            triangles.push([n + k, (k + 1) % n, n + (k + 1) % n]);
+        }
+        positions.push([1.0, 0.0, 0.0]); // used by no face
+        let mut pole = Mesh::new(positions, triangles).unwrap();
+        assert_eq!(pole.join_cut_seams(), n as usize);
+        assert_eq!(pole.vertex_count(), n as usize + 1);
+        // The slivers now repeat the centre; the fan is a closed disk around it.
+        assert!(pole.triangles.iter().filter(|t| t[0] == t[2]).count() == n as usize);
+    }
+}

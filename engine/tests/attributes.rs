@@ -279,6 +279,33 @@ fn textured_assets_come_out_as_gltf_with_their_attributes_and_textures() {
     }
 }
 
+/// The edges with one face once every two vertices at the same position count as one (faces that
+/// then repeat a vertex left out): where two sides of a cut have come apart, their edges are
+/// counted here.
+fn borders_by_position(m: &Mesh) -> usize {
+    let mut first: std::collections::HashMap<[u32; 3], u32> = std::collections::HashMap::new();
+    let id: Vec<u32> = m
+        .positions
+        .iter()
+        .map(|p| {
+            let next = first.len() as u32;
+            *first.entry(p.map(|c| (c + 0.0).to_bits())).or_insert(next)
+        })
+        .collect();
+    let mut faces: std::collections::HashMap<[u32; 2], u32> = std::collections::HashMap::new();
+    for t in &m.triangles {
+        let t = t.map(|v| id[v as usize]);
+        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+            continue;
+        }
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            *faces.entry([a.min(b), a.max(b)]).or_insert(0) += 1;
+        }
+    }
+    faces.values().filter(|&&n| n == 1).count()
+}
+
 #[test]
 fn simplification_keeps_the_textured_assets_attributes_and_seams() {
     use meshlod_engine::simplify::{SimplifyOptions, simplify};
@@ -342,12 +369,7 @@ fn simplification_keeps_the_textured_assets_attributes_and_seams() {
         // No crack: joined by position, the output has no border that the input joined by
         // position has not (an exporter that wrote a vertex per set of values cut the surface
         // along its seams; moved apart, the two sides open it).
-        let welded_borders = |m: &Mesh| {
-            let mut m = m.clone();
-            m.weld_positions();
-            meshlod_engine::validate::validate(&m).boundary_edges
-        };
-        assert!(welded_borders(lod) <= welded_borders(&mesh), "{}: a crack", row["file"]);
+        assert!(borders_by_position(lod) <= borders_by_position(&mesh), "{}: a crack", row["file"]);
     }
 }
 

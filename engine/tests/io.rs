@@ -237,8 +237,7 @@ fn shared_meshes_load_with_known_counts() {
         ("nefertiti", 49971, 99938),
         ("ogre", 62194, 124008),
         ("beetle", 1148, 2053),
-        // (Two of suzanne's 507 `v` lines repeat a position: joined, the file having normals.)
-        ("suzanne", 505, 500),
+        ("suzanne", 507, 500),
     ];
     for (name, vertices, polygons) in expected {
         let mesh = read_mesh(dir.join(format!("{name}.obj"))).unwrap_or_else(|e| panic!("{name}: {e}"));

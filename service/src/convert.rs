@@ -180,7 +180,7 @@ pub fn mesh_from_proto(m: &proto::Mesh, field: &str, limits: &MeshLimits) -> Res
         // One value per vertex, as in PLY: a seam arrives as two vertices at one position (as
         // `mesh_to_proto` sends it). Joined back, a seam is a seam, not a cut that the simplifier
         // would treat as two borders and could open.
-        mesh.weld_positions();
+        mesh.join_cut_seams();
     }
     Ok(mesh)
 }

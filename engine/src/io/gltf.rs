@@ -6,8 +6,8 @@
 //! node's world transform (normals by the inverse transpose; mirrored nodes keep their faces
 //! counter-clockwise) and merged into one mesh. Kept per corner: NORMAL, TANGENT, TEXCOORD_0,
 //! TEXCOORD_1 and COLOR_0, each when every primitive has it, and JOINTS_0 / WEIGHTS_0 of a skinned asset. glTF splits a vertex wherever its attributes differ (seams,
-//! hard edges) and exporters often between primitives too: vertices at bit-identical positions are
-//! joined ([`Mesh::weld_positions`]), so the surface is one piece with seams, not cut open.
+//! hard edges) and exporters often between primitives too: the cut is joined again
+//! ([`Mesh::join_cut_seams`]), so the surface is one piece with seams, not cut open.
 //! POINTS and LINES primitives are not surface and are left out.
 //!
 //! Untrusted input: every accessor and buffer view is checked against the bytes that back it
@@ -730,7 +730,7 @@ fn merge(parts: Vec<Part>, library: MaterialLibrary, path: &Path) -> Result<Mesh
         corners = CornerAttributes::default();
     }
     mesh.corners = corners;
-    mesh.weld_positions();
+    mesh.join_cut_seams();
     mesh.check().map_err(|e| MeshError::parse(path, "data", e.to_string()))?;
     Ok(mesh)
 }

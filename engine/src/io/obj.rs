@@ -5,8 +5,8 @@
 //! line numbers. This reader keeps the file's global vertex numbering (welded position indices),
 //! supports `v/vt/vn` corners and negative (relative) indices, triangulates polygons, and keeps
 //! texture coordinates and normals per corner when every face has them. With those (or materials),
-//! vertices at bit-identical positions are joined ([`Mesh::weld_positions`]), as the glTF and PLY
-//! readers join them: the first keeps its number.
+//! seams that the file cut open are joined again ([`Mesh::join_cut_seams`]), as the glTF and PLY
+//! readers join them: the first of the joined vertices keeps its number.
 
 use std::collections::HashMap;
 use std::io::Write;
@@ -243,9 +243,9 @@ pub fn read_obj(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadL
     let mut mesh = Mesh { positions, triangles, corners };
     if !mesh.corners.is_empty() {
         // Exporters that write one `v` per combination of values (trimesh, as glTF and PLY store
-        // them) cut the surface open along every seam: joined back, a seam is a seam, which the
+        // them) cut the surface open along every seam: joined again, a seam is a seam, which the
         // simplifier moves both sides of together, not two borders it would move apart (a crack).
-        mesh.weld_positions();
+        mesh.join_cut_seams();
     }
     debug_assert!(mesh.check().is_ok());
     Ok(mesh)

@@ -470,9 +470,9 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
     };
     let mut mesh = Mesh { positions, triangles, corners };
     if !mesh.corners.is_empty() {
-        // One value per vertex means a seam is two vertices at one position: joined back, so a
-        // seam is a seam (see `Mesh::weld_positions`), as the writer's split round-trips.
-        mesh.weld_positions();
+        // One value per vertex means a seam is two vertices at one position: joined again, so a
+        // seam is a seam (see `Mesh::join_cut_seams`), as the writer's split round-trips.
+        mesh.join_cut_seams();
     }
     mesh.check()?;
     Ok(mesh)
