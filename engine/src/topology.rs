@@ -153,53 +153,77 @@ impl Mesh {
     /// the order kept); per-corner attributes are untouched.
     /// Returns the number of vertices joined away.
     pub fn join_cut_seams(&mut self) -> usize {
-        use std::collections::HashMap;
-        let key = |v: u32| self.positions[v as usize].map(|c| (c + 0.0).to_bits());
-        let mut faces_at: HashMap<[u32; 2], u32> = HashMap::with_capacity(3 * self.triangles.len() / 2);
-        let directed =
-            || self.triangles.iter().flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]]).filter(|[a, b]| a != b);
-        for [a, b] in directed() {
-            *faces_at.entry([a.min(b), a.max(b)]).or_insert(0) += 1;
+        const NONE: u32 = u32::MAX;
+        let n = self.positions.len();
+        // Each vertex's place: the first vertex at its position.
+        let place: Vec<u32> = {
+            let mut first: std::collections::HashMap<[u32; 3], u32> = std::collections::HashMap::with_capacity(n);
+            let key = |p: &[f32; 3]| p.map(|c| (c + 0.0).to_bits());
+            (0..n as u32).map(|v| *first.entry(key(&self.positions[v as usize])).or_insert(v)).collect()
+        };
+        // Only a vertex that shares its position with another can join.
+        let mut sharing = vec![0u32; n];
+        place.iter().for_each(|&p| sharing[p as usize] += 1);
+        if sharing.iter().all(|&c| c <= 1) {
+            return 0;
         }
-        let mut sets = UnionFind::new(self.positions.len());
-        // Border edges between distinct positions, by the (unordered) pair of positions.
-        let mut along: HashMap<[[u32; 3]; 2], Vec<[u32; 2]>> = HashMap::new();
-        for [a, b] in directed().filter(|[a, b]| faces_at[&[*a.min(b), *a.max(b)]] == 1) {
-            let (pa, pb) = (key(a), key(b));
-            if pa == pb {
-                sets.union(a, b);
-            } else {
-                along.entry([pa.min(pb), pa.max(pb)]).or_default().push([a, b]);
-            }
-        }
-        for edges in along.values() {
-            if let [[a, b], [c, d]] = edges[..]
-                && key(a) == key(d)
-                && key(b) == key(c)
-            {
-                sets.union(a, d);
-                sets.union(b, c);
+        let shared = |v: u32| sharing[place[v as usize] as usize] > 1;
+        let pair = |a: u32, b: u32| (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
+        // The directed edges with a shared end (all of a pair's, or none), sorted by their vertex
+        // pair: a pair met once is a border edge. Those sorted by their pair of places: the border
+        // edges between the same two positions.
+        let mut edges: Vec<(u64, [u32; 2])> = self
+            .triangles
+            .iter()
+            .flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]])
+            .filter(|&[a, b]| a != b && (shared(a) || shared(b)))
+            .map(|[a, b]| (pair(a, b), [a, b]))
+            .collect();
+        edges.sort_unstable_by_key(|e| e.0);
+        let mut borders: Vec<(u64, [u32; 2])> = edges
+            .chunk_by(|x, y| x.0 == y.0)
+            .filter_map(|run| match *run {
+                [(_, [a, b])] => Some((pair(place[a as usize], place[b as usize]), [a, b])),
+                _ => None,
+            })
+            .collect();
+        drop(edges);
+        borders.sort_unstable_by_key(|e| e.0);
+        let mut sets = UnionFind::new(n);
+        let at = |v: u32| place[v as usize];
+        for run in borders.chunk_by(|x, y| x.0 == y.0) {
+            match *run {
+                // Zero length (every edge of the run is): a pole's copies.
+                [(_, [a, b]), ..] if at(a) == at(b) => run.iter().for_each(|&(_, [a, b])| {
+                    sets.union(a, b);
+                }),
+                [(_, [a, b]), (_, [c, d])] if at(a) == at(d) && at(b) == at(c) => {
+                    sets.union(a, d);
+                    sets.union(b, c);
+                }
+                _ => {}
             }
         }
         // A vertex that no face uses (a glTF primitive's share of a vertex buffer that several
-        // use) joins a vertex at its position: it has no faces to disagree.
-        let n = self.positions.len();
+        // use) joins the first used vertex at its position, else the first there.
         let mut used = vec![false; n];
         self.triangles.iter().flatten().for_each(|&v| used[v as usize] = true);
-        // (The first used vertex at the position, else the first at all.)
-        let mut first_at: HashMap<[u32; 3], u32> = HashMap::new();
-        for v in (0..n as u32).filter(|&v| used[v as usize]).chain((0..n as u32).filter(|&v| !used[v as usize])) {
-            let at = *first_at.entry(key(v)).or_insert(v);
-            if !used[v as usize] {
-                sets.union(v, at);
+        let mut first_used = vec![NONE; n];
+        for v in (0..n as u32).filter(|&v| used[v as usize]) {
+            if first_used[at(v) as usize] == NONE {
+                first_used[at(v) as usize] = v;
             }
         }
-        let mut first = vec![u32::MAX; n];
+        for v in (0..n as u32).filter(|&v| !used[v as usize]) {
+            let there = first_used[at(v) as usize];
+            sets.union(v, if there == NONE { at(v) } else { there });
+        }
+        let mut first = vec![NONE; n];
         let mut remap = vec![0u32; n];
         let mut positions = Vec::with_capacity(n);
         for v in 0..n as u32 {
             let root = sets.find(v) as usize;
-            if first[root] == u32::MAX {
+            if first[root] == NONE {
                 first[root] = positions.len() as u32;
                 positions.push(self.positions[v as usize]);
             }

@@ -250,6 +250,8 @@ impl<'o> State<'o> {
         if options.guard > 0.0 {
             state.guard = DistanceGuard::new(mesh, &state.fans);
         }
+        // The quadrics take, besides their faces' planes, a plane through each border edge and
+        // perpendicular to its face: a border keeps its line.
         for &(a, b, f) in &boundary_edges {
             state.add_edge_plane(mesh, f as usize, a, b, BOUNDARY_WEIGHT);
         }
