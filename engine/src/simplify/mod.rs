@@ -24,6 +24,10 @@
 //! 6. the output mesh and, if asked, the progressive mesh built from the log (`crate::pm`);
 //!    `search` runs the whole pipeline once per candidate w.
 //!
+//! The loop (5) runs on the calling thread. On a large mesh the passes of 2–4 and 6 that need
+//! nothing of each other run side by side where the rayon pool has more than one thread
+//! (`crate::parallel`); each gives what one pass gives, so the output never depends on the threads.
+//!
 //! ## Ordering and ties
 //! For QFVP with w > 0 the cost is exactly zero where both endpoint normals agree (flat regions):
 //! those collapses all cost nothing. The queue puts every zero-cost candidate first, ordered among
