@@ -2,7 +2,7 @@
 //!
 //! For each direction A → B the one-sided distance h(A → B) = max over p in A of d(p, B) is
 //! bracketed by a lower bound L (an exact distance reached at some point of A) and an upper bound
-//! U (proved for every point of A), by branch and bound over A's triangles ([`bounds`]); the search
+//! U (proved for every point of A), by branch and bound over A's triangles (`bounds`); the search
 //! stops when U ≤ L · (1 + tolerance). The symmetric distance is the larger direction; the
 //! published figure `hausdorff` is U, so it is never below the true distance.
 //!

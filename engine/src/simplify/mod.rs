@@ -64,8 +64,8 @@
 //! distance jumps. The guard charges each candidate `guard · A · d²` on top of its quadric error
 //! (then the QFVP normal factor as usual), with A the surface area behind the merged quadric and d
 //! a measured distance, both ways: from the input vertices merged into the endpoints (up to
-//! [`WITNESSES`] each, the farthest) to the fan the collapse would create, and from the new
-//! position and the new faces' centroids to the input surface ([`DistanceGuard`]). The term only
+//! `guard::WITNESSES` each, the farthest) to the fan the collapse would create, and from the new
+//! position and the new faces' centroids to the input surface (`guard::DistanceGuard`). The term only
 //! adds, so entries are queued without it and measured when they reach the top: one that is no
 //! longer the cheapest goes back with its measured key (a lazy queue: the greedy order of the
 //! guarded costs, measuring ~3 candidates per collapse instead of ~12). Its price in time is in

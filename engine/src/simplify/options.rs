@@ -116,7 +116,7 @@ impl AttributeWeights {
     }
 }
 
-/// Options of [`simplify`]. Targets combine: simplification stops at whichever is met first.
+/// Options of [`simplify`](super::simplify()). Targets combine: simplification stops at whichever is met first.
 #[derive(Debug, Clone)]
 pub struct SimplifyOptions {
     /// Stop when at most this many faces remain.
@@ -257,7 +257,7 @@ pub struct SimplifyStats {
     pub seconds: f64,
 }
 
-/// Result of [`simplify`].
+/// Result of [`simplify`](super::simplify()).
 #[derive(Debug, Clone)]
 pub struct Simplified {
     /// The simplified mesh: surviving vertices in input order, surviving faces in input order.
