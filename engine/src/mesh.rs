@@ -559,6 +559,15 @@ impl Mesh {
         self.corners.check(3 * self.triangles.len())
     }
 
+    /// For each vertex, the first vertex at its position (bit-identical, −0 and +0 alike): itself
+    /// where it is the first or the only one there.
+    pub fn first_at_each_position(&self) -> Vec<u32> {
+        let mut first: std::collections::HashMap<[u32; 3], u32> =
+            std::collections::HashMap::with_capacity(self.positions.len());
+        let key = |p: &[f32; 3]| p.map(|c| (c + 0.0).to_bits());
+        (0..self.positions.len() as u32).map(|v| *first.entry(key(&self.positions[v as usize])).or_insert(v)).collect()
+    }
+
     /// Number of vertices (including unreferenced ones).
     pub fn vertex_count(&self) -> usize {
         self.positions.len()

@@ -156,11 +156,7 @@ impl Mesh {
         const NONE: u32 = u32::MAX;
         let n = self.positions.len();
         // Each vertex's place: the first vertex at its position.
-        let place: Vec<u32> = {
-            let mut first: std::collections::HashMap<[u32; 3], u32> = std::collections::HashMap::with_capacity(n);
-            let key = |p: &[f32; 3]| p.map(|c| (c + 0.0).to_bits());
-            (0..n as u32).map(|v| *first.entry(key(&self.positions[v as usize])).or_insert(v)).collect()
-        };
+        let place = self.first_at_each_position();
         // Only a vertex that shares its position with another can join.
         let mut sharing = vec![0u32; n];
         place.iter().for_each(|&p| sharing[p as usize] += 1);

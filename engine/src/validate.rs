@@ -310,10 +310,7 @@ pub struct CleanReport {
 pub fn clean(mesh: &Mesh) -> (Mesh, CleanReport) {
     let mut report = CleanReport::default();
     // Weld: first vertex at a position wins. -0.0 and 0.0 are the same position.
-    let key = |p: &[f32; 3]| p.map(|c| if c == 0.0 { 0u32 } else { c.to_bits() });
-    let mut first_at: HashMap<[u32; 3], u32> = HashMap::with_capacity(mesh.vertex_count());
-    let weld: Vec<u32> =
-        mesh.positions.iter().enumerate().map(|(v, p)| *first_at.entry(key(p)).or_insert(v as u32)).collect();
+    let weld = mesh.first_at_each_position();
     report.welded_vertices = weld.iter().enumerate().filter(|&(v, &w)| v as u32 != w).count();
 
     let mut seen: std::collections::HashSet<[u32; 3]> = std::collections::HashSet::with_capacity(mesh.face_count());

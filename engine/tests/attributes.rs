@@ -279,31 +279,12 @@ fn textured_assets_come_out_as_gltf_with_their_attributes_and_textures() {
     }
 }
 
-/// The edges with one face once every two vertices at the same position count as one (faces that
-/// then repeat a vertex left out): where two sides of a cut have come apart, their edges are
-/// counted here.
+/// The border edges once every two vertices at the same position count as one (`clean`: faces
+/// that then repeat a vertex, or have no area, left out): where two sides of a cut have come
+/// apart, their edges are counted here.
 fn borders_by_position(m: &Mesh) -> usize {
-    let mut first: std::collections::HashMap<[u32; 3], u32> = std::collections::HashMap::new();
-    let id: Vec<u32> = m
-        .positions
-        .iter()
-        .map(|p| {
-            let next = first.len() as u32;
-            *first.entry(p.map(|c| (c + 0.0).to_bits())).or_insert(next)
-        })
-        .collect();
-    let mut faces: std::collections::HashMap<[u32; 2], u32> = std::collections::HashMap::new();
-    for t in &m.triangles {
-        let t = t.map(|v| id[v as usize]);
-        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
-            continue;
-        }
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            *faces.entry([a.min(b), a.max(b)]).or_insert(0) += 1;
-        }
-    }
-    faces.values().filter(|&&n| n == 1).count()
+    let (joined, _) = meshlod_engine::validate::clean(m);
+    meshlod_engine::validate::validate(&joined).boundary_edges
 }
 
 #[test]
