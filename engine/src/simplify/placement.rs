@@ -72,6 +72,22 @@ impl State<'_> {
             }
         };
         let (pa, pb) = (to_f64(va.position), to_f64(vb.position));
+        let quadric_cost = matches!(self.options.metric, Metric::Qem | Metric::Qfvp { .. });
+        if quadric_cost && self.wedges.is_none() && !(may_move && self.options.placement != Placement::Endpoint) {
+            // The endpoints alone, without attribute quadrics (every ranking on a mesh with
+            // texture coordinates, whose `auto` placement is `endpoint`): the choice of the general
+            // path below, the same operations in the same order, without its closures.
+            let q = va.quadric + vb.quadric;
+            let factor = self.normal_factor(va, vb);
+            let (e_a, e_b) = (q.error(pa), q.error(pb));
+            let (cost_a, cost_b) = ((e_a + 0.0) * factor, (e_b + 0.0) * factor);
+            let take_b = may_keep_b && (!may_keep_a || (cost_b, e_b) < (cost_a, e_a));
+            return match (may_keep_a, take_b) {
+                (_, true) => Some(Choice { cost: cost_b, error: e_b, keep: Keep::B, position: pb }),
+                (true, false) => Some(Choice { cost: cost_a, error: e_a, keep: Keep::A, position: pa }),
+                (false, false) => None,
+            };
+        }
         let mut best: Option<Choice> = None;
         // Keeps the choice with the lower (cost, error); the first one considered wins a tie.
         let mut consider = |keep: Keep, position: DVec3, cost: f64, error: f64| {
