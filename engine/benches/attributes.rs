@@ -28,6 +28,10 @@ use meshlod_engine::io::{MeshFormat, ReadLimits, WriteOptions, read_mesh, read_m
 use meshlod_engine::simplify::{AttributeWeights, SimplifyOptions, simplify};
 
 /// The attribute quadrics' weights measured beside the default.
+/// Timed calls per side, interleaved, best taken (as the simplify bench: with 5 a ratio moved by
+/// more between runs than the changes it measures).
+const RUNS: usize = 15;
+
 const WEIGHTED: AttributeWeights = AttributeWeights { uv: 0.3, normal: 0.0, color: 0.0 };
 
 /// meshoptimizer's input: `mesh`'s vertices split where their attributes differ, with the
@@ -113,7 +117,7 @@ fn main() {
         let target = reached.max(peer_reached);
         let options = SimplifyOptions { target_ratio: None, target_faces: Some(target), ..first.clone() };
         let ((ours, t_ours), (indices, t_theirs)) = pool.install(|| {
-            best_of_interleaved(5, || simplify(&mesh, &options).expect("simplifies"), || peer(&input, target))
+            best_of_interleaved(RUNS, || simplify(&mesh, &options).expect("simplifies"), || peer(&input, target))
         });
         let triangles = indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
         let mut theirs = Mesh::new(input.positions.clone(), triangles).expect("meshopt's output is a mesh");
@@ -159,7 +163,7 @@ fn main() {
         // meshoptimizer result.
         let weighted = SimplifyOptions { attribute_weights: WEIGHTED, ..options.clone() };
         let (term, t_term) =
-            pool.install(|| best_of_interleaved(5, || simplify(&mesh, &weighted).expect("simplifies"), || ()).0);
+            pool.install(|| best_of_interleaved(RUNS, || simplify(&mesh, &weighted).expect("simplifies"), || ()).0);
         let a_term = look(&term.mesh);
         term_rows.push(format!(
             "| {} | {} | {:.2} | {:.2} | {} / {} | {} / {} |",
