@@ -9,7 +9,7 @@
 //! (paper units) for both; then the appearance error ([`meshlod_engine::appearance`]): texture-space
 //! distance to the input's values at the nearest input point on the same chart (and, beside it,
 //! of any chart), in texels of a 1024² texture, and normal deviation in degrees, over 20 000 points spread over each result by
-//! area. Times: one thread, interleaved, best of 5. Last, meshlod's result written as GLB with
+//! area. Times: one thread, interleaved, best of 15. Last, meshlod's result written as GLB with
 //! floats and quantized (`--quantize`): bytes, and how far quantizing moved the surface.
 //!
 //! Run: `cargo bench -p meshlod-engine --bench attributes`.
