@@ -27,11 +27,11 @@ use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
 use meshlod_engine::io::{MeshFormat, ReadLimits, WriteOptions, read_mesh, read_mesh_bytes, write_gltf_with};
 use meshlod_engine::simplify::{AttributeWeights, SimplifyOptions, simplify};
 
-/// The attribute quadrics' weights measured beside the default.
 /// Timed calls per side, interleaved, best taken (as the simplify bench: with 5 a ratio moved by
 /// more between runs than the changes it measures).
 const RUNS: usize = 15;
 
+/// The attribute quadrics' weights measured beside the default.
 const WEIGHTED: AttributeWeights = AttributeWeights { uv: 0.3, normal: 0.0, color: 0.0 };
 
 /// meshoptimizer's input: `mesh`'s vertices split where their attributes differ, with the

@@ -157,13 +157,14 @@ impl Mesh {
         let n = self.positions.len();
         // Each vertex's place: the first vertex at its position.
         let place = self.first_at_each_position();
+        let at = |v: u32| place[v as usize];
         // Only a vertex that shares its position with another can join.
         let mut sharing = vec![0u32; n];
         place.iter().for_each(|&p| sharing[p as usize] += 1);
         if sharing.iter().all(|&c| c <= 1) {
             return 0;
         }
-        let shared = |v: u32| sharing[place[v as usize] as usize] > 1;
+        let shared = |v: u32| sharing[at(v) as usize] > 1;
         let pair = |a: u32, b: u32| (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
         // The directed edges with a shared end (all of a pair's, or none), sorted by their vertex
         // pair: a pair met once is a border edge. Those sorted by their pair of places: the border
@@ -179,14 +180,13 @@ impl Mesh {
         let mut borders: Vec<(u64, [u32; 2])> = edges
             .chunk_by(|x, y| x.0 == y.0)
             .filter_map(|run| match *run {
-                [(_, [a, b])] => Some((pair(place[a as usize], place[b as usize]), [a, b])),
+                [(_, [a, b])] => Some((pair(at(a), at(b)), [a, b])),
                 _ => None,
             })
             .collect();
         drop(edges);
         borders.sort_unstable_by_key(|e| e.0);
         let mut sets = UnionFind::new(n);
-        let at = |v: u32| place[v as usize];
         for run in borders.chunk_by(|x, y| x.0 == y.0) {
             match *run {
                 // Zero length (every edge of the run is): a pole's copies.
