@@ -495,6 +495,13 @@ async fn invalid_requests_name_the_field() {
         ),
         (
             proto::SimplifyRequest {
+                options: Some(proto::SimplifyOptions { prune: true, return_progressive: true, ..Default::default() }),
+                ..simplify_request(&procedural::icosphere(2), 0.5)
+            },
+            "options.prune",
+        ),
+        (
+            proto::SimplifyRequest {
                 options: Some(proto::SimplifyOptions { metric: 42, ..Default::default() }),
                 ..simplify_request(&procedural::icosphere(2), 0.5)
             },

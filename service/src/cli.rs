@@ -292,6 +292,11 @@ pub struct SimplifyArgs {
     /// off by default: docs/attributes-report.md has what it does and costs).
     #[arg(long, value_name = "uv=W,normal=W,color=W", value_parser = parse_attribute_weights)]
     pub attribute_weights: Option<proto::AttributeWeights>,
+    /// Take out whole parts (faces joined through shared vertices: chain links, bolts) once the
+    /// error reaches their size, so that their faces go to the larger shapes; the part with the
+    /// most faces stays. Not with --pm (docs/attributes-report.md).
+    #[arg(long, conflicts_with = "pm")]
+    pub prune: bool,
     /// Largest change of a face normal one collapse may cause, in degrees (default 90).
     #[arg(long)]
     pub max_normal_change: Option<f64>,
@@ -363,6 +368,7 @@ impl SimplifyArgs {
             distance_term: self.distance_term,
             progressive_lossless: self.pm_lossless,
             attribute_weights: self.attribute_weights,
+            prune: self.prune,
         };
         SimplifyJob {
             input: self.input.clone(),

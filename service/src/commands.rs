@@ -155,8 +155,13 @@ fn run_simplify(executor: &dyn Executor, args: &SimplifyArgs) -> Result<()> {
         "1" => ", 1 triangular hole closed".into(),
         n => format!(", {n} triangular holes closed"),
     };
+    let parts = match text(&report, "parts_removed").as_str() {
+        "0" => String::new(),
+        "1" => ", 1 part taken out".into(),
+        n => format!(", {n} parts taken out"),
+    };
     out!(
-        "{} → {} faces, {} → {} vertices ({}): {} collapses, {} refused, {} frozen vertices{holes}",
+        "{} → {} faces, {} → {} vertices ({}): {} collapses, {} refused, {} frozen vertices{holes}{parts}",
         text(&report, "faces_in"),
         text(&report, "faces_out"),
         text(&report, "vertices_in"),

@@ -382,6 +382,7 @@ impl TryFrom<&proto::SimplifyOptions> for SimplifyOptions {
             attribute_weights: o.attribute_weights.as_ref().map_or(defaults.attribute_weights, |w| {
                 meshlod_engine::simplify::AttributeWeights { uv: w.uv, normal: w.normal, color: w.color }
             }),
+            prune: o.prune,
             cancel: None,
         })
     }

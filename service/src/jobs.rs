@@ -133,6 +133,7 @@ pub fn simplify(
         warnings: simplify_warnings(o).into_iter().chain(mesh.corners.not_carried_warning()).collect(),
         frozen_vertices: s.frozen_vertices as u32,
         holes_closed: s.holes_closed as u32,
+        parts_removed: s.parts_removed as u32,
         target_faces: s.target_faces as u32,
         rejected: s.rejected as u64,
         placement: format!("{:?}", result.stats.placement).to_lowercase(),

@@ -55,6 +55,7 @@ pub fn simplify(s: &proto::SimplifyStats, measured: Option<&proto::HausdorffRepo
         "rejected": s.rejected,
         "frozen_vertices": s.frozen_vertices,
         "holes_closed": s.holes_closed,
+        "parts_removed": s.parts_removed,
         "metric": s.metric,
         "w": if s.metric == "melax" { Value::Null } else { json!(s.w) },
         "w_source": w_source,

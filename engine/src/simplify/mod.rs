@@ -135,6 +135,7 @@ pub(crate) mod kernel;
 mod legality;
 mod options;
 mod placement;
+mod prune;
 mod queue;
 mod retry;
 mod run;
@@ -192,8 +193,9 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     state.carry_attributes(&prepared);
     // 4. Every edge queued.
     let heap = run::initial_queue(&state, edges, faces_in);
-    // 5. The loop.
-    let run = run::run(&mut state, heap, &units, faces_in, target)?;
+    // 5. The loop (with the parts it may take out whole, when asked to).
+    let parts = options.prune.then(|| prune::Parts::new(&prepared, &units));
+    let run = run::run(&mut state, heap, parts, &units, faces_in, target)?;
     // 6. Outputs. The guard's tree and tables are done with: their memory goes back first.
     state.guard = None;
     state.rebuild_triangles(&prepared, &run.log);
@@ -221,8 +223,9 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
             })
         },
     );
-    let frozen_vertices =
-        state.vertices.iter().filter(|v| matches!(v.kind, VertexKind::Frozen | VertexKind::Anchored)).count();
+    let frozen_vertices = (state.vertices.iter().zip(&state.vertex_alive))
+        .filter(|&(v, &alive)| alive && matches!(v.kind, VertexKind::Frozen | VertexKind::Anchored))
+        .count();
     let stats = SimplifyStats {
         faces_in,
         faces_out: simplified.face_count(),
@@ -237,6 +240,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
         refused: run.refused,
         frozen_vertices,
         holes_closed: run.log.iter().filter(|r| r.hole != crate::pm::NO_VERTEX).count(),
+        parts_removed: run.parts_removed,
         dropped_degenerate_faces: dropped,
         distance_term: state.fan_term,
         seconds: started.elapsed().as_secs_f64(),

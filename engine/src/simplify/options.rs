@@ -163,6 +163,15 @@ pub struct SimplifyOptions {
     /// it has taken in gave there (`attribute_quadric`). All 0, the default, turns them off;
     /// measured in docs/attributes-report.md.
     pub attribute_weights: AttributeWeights,
+    /// Take out whole parts (faces joined through shared vertices: chain links, bolts, a tree's
+    /// far leaves) once the run's largest collapse error reaches their size, so that the faces
+    /// they would keep go to the larger shapes, as meshoptimizer's `SimplifyPrune` does. A part's
+    /// size, paper units, is the larger of half its bounding box's diagonal and its farthest
+    /// vertex's distance to the other parts (`prune` module). The part with the most faces always
+    /// stays; a part goes only while the face target allows it. Off by default, where every part
+    /// keeps at least its smallest manifold form; not with `record_progressive` (a vertex split
+    /// cannot bring back a part its base mesh lacks). Measured in docs/attributes-report.md.
+    pub prune: bool,
     /// Set to `true` by another thread to stop the work; the call then returns
     /// [`MeshError::Cancelled`].
     pub cancel: Option<Arc<AtomicBool>>,
@@ -186,6 +195,7 @@ impl Default for SimplifyOptions {
             distance_term: DEFAULT_DISTANCE_TERM,
             lock_seams: false,
             attribute_weights: AttributeWeights::default(),
+            prune: false,
             cancel: None,
         }
     }
@@ -247,6 +257,8 @@ pub struct SimplifyStats {
     /// Triangular holes (boundary loops of three edges) closed by collapsing one of their edges
     /// (rule 3): each takes one boundary loop away.
     pub holes_closed: usize,
+    /// Parts taken out whole ([`SimplifyOptions::prune`]).
+    pub parts_removed: usize,
     /// Faces dropped before simplifying because they repeat a vertex index.
     pub dropped_degenerate_faces: usize,
     /// The fan-distance term's weight that applied: 0 where it was off or did not apply (Melax,
@@ -317,6 +329,13 @@ impl SimplifyOptions {
             return Err(MeshError::InvalidParameter {
                 name: "distance_term",
                 reason: format!("{term} must be a finite number ≥ 0"),
+            });
+        }
+        if self.prune && self.record_progressive {
+            return Err(MeshError::InvalidParameter {
+                name: "prune",
+                reason: "a progressive mesh cannot bring back a part its base mesh lacks: ask for one or the other"
+                    .into(),
             });
         }
         let a = self.attribute_weights;

@@ -12,6 +12,7 @@ use crate::queue::{QueueEntry, TieredQueue};
 use super::guard::GUARDED;
 use super::kernel::{NONE, State, to_f64};
 use super::options::{Refusals, StopReason};
+use super::prune::Parts as Prune;
 use super::retry::Retry;
 
 /// Passes at most: when the queue runs dry before the target, a new pass queues again the edges
@@ -28,6 +29,8 @@ pub(super) struct Run {
     pub(super) refused: Refusals,
     /// Largest collapse error estimate, paper units.
     pub(super) max_collapse_error: f64,
+    /// Parts taken out whole.
+    pub(super) parts_removed: usize,
 }
 
 /// The queue of every edge of the fresh state, heapified once (linear) rather than pushed edge by
@@ -81,6 +84,7 @@ fn rank_block(state: &State, edges: &[[u32; 2]]) -> Vec<QueueEntry> {
 pub(super) fn run(
     state: &mut State,
     mut heap: TieredQueue,
+    mut parts: Option<Prune>,
     units: &DistanceUnits,
     faces_in: usize,
     target: usize,
@@ -108,6 +112,10 @@ pub(super) fn run(
         (faces_in as f64 * (1.0 - super::fan_term::FAN_TERM_FROM)).round() as usize
     };
     let stop_reason = loop {
+        // Parts as small as the error reached so far go whole, while the target allows.
+        if let Some(parts) = &mut parts {
+            faces_alive -= parts.prune(state, max_collapse_error, faces_alive, target);
+        }
         // Stop: the face target is met.
         if faces_alive <= target {
             break StopReason::TargetReached;
@@ -219,5 +227,6 @@ pub(super) fn run(
             heap.sweep(|e| state.is_current(e));
         }
     };
-    Ok(Run { log, stop_reason, refused, max_collapse_error })
+    let parts_removed = parts.map_or(0, |p| p.removed);
+    Ok(Run { log, stop_reason, refused, max_collapse_error, parts_removed })
 }
