@@ -9,8 +9,9 @@
 //! (paper units) for both; then the appearance error ([`meshlod_engine::appearance`]): texture-space
 //! distance to the input's values at the nearest input point on the same chart (and, beside it,
 //! of any chart), in texels of a 1024² texture, and normal deviation in degrees, over 20 000 points spread over each result by
-//! area. Times: one thread, interleaved, best of 15. Last, meshlod's result written as GLB with
-//! floats and quantized (`--quantize`): bytes, and how far quantizing moved the surface.
+//! area. Times: one thread, interleaved, best of 15. Then the same count with the attribute
+//! quadrics and with `--prune`; last, meshlod's result written as GLB with floats and quantized
+//! (`--quantize`): bytes, and how far quantizing moved the surface.
 //!
 //! Run: `cargo bench -p meshlod-engine --bench attributes`.
 
@@ -25,7 +26,7 @@ use meshlod_engine::Mesh;
 use meshlod_engine::appearance::{Spread, appearance_error};
 use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
 use meshlod_engine::io::{MeshFormat, ReadLimits, WriteOptions, read_mesh, read_mesh_bytes, write_gltf_with};
-use meshlod_engine::simplify::{AttributeWeights, SimplifyOptions, simplify};
+use meshlod_engine::simplify::{AttributeWeights, Simplified, SimplifyOptions, simplify};
 
 /// Timed calls per side, interleaved, best taken (as the simplify bench: with 5 a ratio moved by
 /// more between runs than the changes it measures).
@@ -104,6 +105,7 @@ fn main() {
     let mut appearance_rows = Vec::new();
     let mut term_rows = Vec::new();
     let mut size_rows = Vec::new();
+    let mut prune_rows = Vec::new();
     for path in assets {
         let mesh = read_mesh(&path).expect("reads");
         let first = SimplifyOptions { target_ratio: Some(0.9), ..Default::default() };
@@ -159,22 +161,41 @@ fn main() {
         ));
         let error = |m: &Mesh| hausdorff(&mesh, m, &HausdorffOptions::default()).expect("measures").hausdorff;
         let (e_ours, e_theirs) = (error(&ours.mesh), error(&theirs));
-        // The same with the attribute quadrics on (`--attribute-weights uv=0.3`), beside the same
-        // meshoptimizer result.
-        let weighted = SimplifyOptions { attribute_weights: WEIGHTED, ..options.clone() };
-        let (term, t_term) =
-            pool.install(|| best_of_interleaved(RUNS, || simplify(&mesh, &weighted).expect("simplifies"), || ()).0);
-        let a_term = look(&term.mesh);
+        // Other options at the same count, beside the same meshoptimizer result: the result, its
+        // time over meshoptimizer's (timed interleaved with it again) and its appearance error.
+        let variant = |o: &SimplifyOptions| {
+            let ((out, t), (_, t_peer)) = pool.install(|| {
+                best_of_interleaved(RUNS, || simplify(&mesh, o).expect("simplifies"), || peer(&input, target))
+            });
+            let a = look(&out.mesh);
+            (out, t / t_peer, a)
+        };
+        // Each variant's row starts with the asset, its faces, and its position error and time
+        // over meshoptimizer's.
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("?");
+        let lead = |out: &Simplified, time: f64| {
+            format!("| {name} | {} | {:.2} | {:.2} |", out.mesh.face_count(), error(&out.mesh) / e_theirs, time)
+        };
+        // The attribute quadrics on (`--attribute-weights uv=0.3`).
+        let (term, term_time, a_term) = variant(&SimplifyOptions { attribute_weights: WEIGHTED, ..options.clone() });
         term_rows.push(format!(
-            "| {} | {} | {:.2} | {:.2} | {} / {} | {} / {} |",
-            path.file_name().and_then(|n| n.to_str()).unwrap_or("?"),
-            term.mesh.face_count(),
-            error(&term.mesh) / e_theirs,
-            t_term / t_theirs,
+            "{} {} / {} | {} / {} |",
+            lead(&term, term_time),
             cell(a_term.uv_texels, |s| s.mean),
             cell(a_ours.uv_texels, |s| s.mean),
             cell(a_term.normal_degrees, |s| s.mean),
             cell(a_ours.normal_degrees, |s| s.mean),
+        ));
+        // `--prune`: parts taken out whole once the error reaches their size.
+        let (pruned, prune_time, a_pruned) = variant(&SimplifyOptions { prune: true, ..options.clone() });
+        prune_rows.push(format!(
+            "{} {} | {} / {} | {} / {} |",
+            lead(&pruned, prune_time),
+            pruned.stats.parts_removed,
+            cell(a_pruned.uv_texels, |s| s.mean),
+            cell(a_theirs.uv_texels, |s| s.mean),
+            cell(a_pruned.uv_texels, |s| s.p95),
+            cell(a_theirs.uv_texels, |s| s.p95),
         ));
         size_rows.push(quantized_row(&path, &ours.mesh));
         println!(
@@ -207,6 +228,13 @@ fn main() {
          |---|---:|---:|---:|---:|---:|"
     );
     for row in term_rows {
+        println!("{row}");
+    }
+    println!(
+        "\n| asset (`--prune`) | faces | position error ÷ meshopt's | time ÷ meshopt's | parts taken out | uv mean, texels (prune / meshopt) | uv p95 |\n\
+         |---|---:|---:|---:|---:|---:|---:|"
+    );
+    for row in prune_rows {
         println!("{row}");
     }
     println!(

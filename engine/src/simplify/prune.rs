@@ -83,12 +83,31 @@ impl<'m> Parts<'m> {
         let n = mesh.vertex_count();
         let mut parent: Vec<u32> = (0..n as u32).collect();
         for t in &mesh.triangles {
+            let mut x = root(&mut parent, t[0]);
             for k in 1..3 {
-                let (x, y) = (root(&mut parent, t[0]), root(&mut parent, t[k]));
+                let y = root(&mut parent, t[k]);
                 if x != y {
                     parent[x.max(y) as usize] = x.min(y);
+                    x = x.min(y);
                 }
             }
+        }
+        // One part (the usual input): it stays, and there is nothing else to look at.
+        if (0..n as u32).filter(|&v| parent[v as usize] == v).take(2).count() < 2 {
+            return Parts {
+                mesh,
+                units: *units,
+                shapes: Vec::new(),
+                by_radius: Vec::new(),
+                next: 0,
+                waiting: BinaryHeap::new(),
+                face_start: vec![0],
+                faces: Vec::new(),
+                vertex_start: vec![0],
+                vertices: Vec::new(),
+                done: true,
+                removed: 0,
+            };
         }
         // Dense part numbers, in the order of each part's lowest vertex.
         let mut number = vec![u32::MAX; n];
