@@ -84,8 +84,8 @@ impl<'m> Parts<'m> {
         let mut parent: Vec<u32> = (0..n as u32).collect();
         for t in &mesh.triangles {
             let mut x = root(&mut parent, t[0]);
-            for k in 1..3 {
-                let y = root(&mut parent, t[k]);
+            for &v in &t[1..] {
+                let y = root(&mut parent, v);
                 if x != y {
                     parent[x.max(y) as usize] = x.min(y);
                     x = x.min(y);
