@@ -21,6 +21,22 @@ fn sphere_and_link() -> (Mesh, usize) {
     (Mesh::new(positions, triangles).expect("a mesh"), link.face_count())
 }
 
+/// The sphere with a chain of four such links going outwards from its side, each touching the
+/// next: only a link near a part that stays (the sphere) may go.
+fn sphere_and_chain() -> Mesh {
+    let sphere = procedural::icosphere(4);
+    let link = procedural::torus(24, 8, 0.3);
+    let mut positions = sphere.positions.clone();
+    let mut triangles = sphere.triangles.clone();
+    for k in 0..4 {
+        let offset = positions.len() as u32;
+        let x = 1.0 + 0.012 * k as f32;
+        positions.extend(link.positions.iter().map(|p| [x + 0.005 * (p[0] + 1.3), 0.005 * p[1], 0.005 * p[2]]));
+        triangles.extend(link.triangles.iter().map(|t| t.map(|v| v + offset)));
+    }
+    Mesh::new(positions, triangles).expect("a mesh")
+}
+
 fn to(faces: usize, prune: bool) -> SimplifyOptions {
     SimplifyOptions { target_ratio: None, target_faces: Some(faces), prune, ..Default::default() }
 }
@@ -59,6 +75,18 @@ fn the_largest_part_stays_and_pruning_never_goes_below_the_target() {
     let target = sphere_faces + link_faces / 2;
     let out = simplify(&mesh, &to(target, true)).expect("simplifies");
     assert!(out.mesh.face_count() + 1 >= target, "{} faces for a target of {target}", out.mesh.face_count());
+}
+
+#[test]
+fn a_chain_of_small_parts_goes_only_where_it_is_near_a_part_that_stays() {
+    let mesh = sphere_and_chain();
+    assert_eq!(validate(&mesh).components, 5);
+    let out = simplify(&mesh, &to(150, true)).expect("simplifies");
+    // Each link touches the next, so measured against every other part each would go; measured
+    // against the parts that stay, the far ones are too far from the sphere.
+    let removed = out.stats.parts_removed;
+    assert!(removed >= 1 && removed < 4, "{:?}", out.stats);
+    assert_eq!(validate(&out.mesh).components, 5 - removed);
 }
 
 #[test]

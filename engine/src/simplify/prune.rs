@@ -7,13 +7,18 @@
 //! (docs/attributes-report.md). With `prune`, a part goes whole once the run's largest collapse
 //! error (paper units) reaches its size: the larger of half its bounding box's diagonal (as
 //! meshoptimizer's `SimplifyPrune` weighs its parts by their radius) and how far its farthest
-//! vertex is from the other parts' surface, the distance its absence opens (a hand modelled apart
-//! from the arm it sticks out of goes late, a button on a coat early). Both are measured on the
-//! input, so the order does not depend on how far the part itself was simplified.
+//! vertex is from the parts that stay, the distance its absence opens (a hand modelled apart from
+//! the arm it sticks out of goes late, a button on a coat early). The parts that stay are those
+//! still there whose radius is above the error (the one with the most faces at least): a part
+//! next to another small one does not go on the strength of a neighbour that may go too (a chain
+//! of small parts, a robot's links, would go link by link, each near the last, until the surface
+//! that was there is far from anything left). Both are measured on the input, so the order does
+//! not depend on how far a part itself was simplified.
 //!
-//! The distance to the other parts is measured once a part's radius is within the error (most
-//! parts of a large asset never are): each of its vertices looks for the nearest triangle of the
-//! other parts, part by part in the order of their bounding boxes' distance.
+//! The distance is measured once a part's radius is within the error (most parts of a large asset
+//! never are), and again when the error reaches it, as the parts that stay are then fewer: each of
+//! its vertices looks for the nearest triangle of those parts, part by part in the order of their
+//! bounding boxes' distance.
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -33,10 +38,14 @@ pub(super) struct Parts<'m> {
     shapes: Vec<(TriangleBvh, DVec3, DVec3)>,
     /// (radius in paper units, part): every part but the one with the most faces, smallest first.
     by_radius: Vec<(f64, u32)>,
+    /// Per part, its radius in paper units (infinite for the one with the most faces, which
+    /// stays), and whether it is still there.
+    radius: Vec<f64>,
+    present: Vec<bool>,
     /// The next entry of `by_radius` whose radius the error has not reached.
     next: usize,
-    /// Parts within the error by radius, by their size (the larger of radius and distance, paper
-    /// units, as bits: non-negative floats order as their bits do).
+    /// Parts within the error by radius, by a lower bound of their size (paper units, as bits:
+    /// non-negative floats order as their bits do).
     waiting: BinaryHeap<Reverse<(u64, u32)>>,
     /// Per part, its faces: `faces[face_start[p]..face_start[p + 1]]`.
     face_start: Vec<u32>,
@@ -99,6 +108,8 @@ impl<'m> Parts<'m> {
                 units: *units,
                 shapes: Vec::new(),
                 by_radius: Vec::new(),
+                radius: Vec::new(),
+                present: Vec::new(),
                 next: 0,
                 waiting: BinaryHeap::new(),
                 face_start: vec![0],
@@ -139,12 +150,18 @@ impl<'m> Parts<'m> {
                 (units.to_paper(0.5 * (hi - lo).length()), p as u32)
             })
             .collect();
+        let mut radius = vec![f64::INFINITY; parts];
+        for &(r, p) in &by_radius {
+            radius[p as usize] = r;
+        }
         by_radius.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         Parts {
             mesh,
             units: *units,
             shapes: Vec::new(),
             by_radius,
+            radius,
+            present: vec![true; parts],
             next: 0,
             waiting: BinaryHeap::new(),
             face_start,
@@ -156,8 +173,9 @@ impl<'m> Parts<'m> {
         }
     }
 
-    /// How far part `p`'s farthest vertex is from the other parts' triangles, paper units.
-    fn distance_to_others(&mut self, p: u32) -> f64 {
+    /// How far part `p`'s farthest vertex is from the triangles of the parts that stay at `error`
+    /// (still there, and larger than the error: the one with the most faces at least), paper units.
+    fn distance_to_staying(&mut self, p: u32, error: f64) -> f64 {
         let mesh = self.mesh;
         if self.shapes.is_empty() {
             let mut local = vec![0u32; mesh.vertex_count()];
@@ -183,7 +201,8 @@ impl<'m> Parts<'m> {
         for &v in members {
             let q = mesh.point(v);
             order.clear();
-            for (j, (_, lo, hi)) in self.shapes.iter().enumerate().filter(|&(j, _)| j != p as usize) {
+            let stays = |j: usize| j != p as usize && self.present[j] && self.radius[j] > error;
+            for (j, (_, lo, hi)) in self.shapes.iter().enumerate().filter(|&(j, _)| stays(j)) {
                 order.push(((*lo - q).max(q - *hi).max(DVec3::ZERO).length_squared(), j));
             }
             order.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -210,17 +229,23 @@ impl<'m> Parts<'m> {
             if radius > error {
                 break;
             }
-            let size = radius.max(self.distance_to_others(part));
-            self.waiting.push(Reverse((size.to_bits(), part)));
+            self.waiting.push(Reverse((radius.to_bits(), part)));
             self.next += 1;
         }
         let mut taken = 0;
-        while let Some(&Reverse((size, part))) = self.waiting.peek() {
-            if f64::from_bits(size) > error {
+        while let Some(&Reverse((bound, part))) = self.waiting.peek() {
+            if f64::from_bits(bound) > error {
                 break;
             }
             self.waiting.pop();
             let p = part as usize;
+            // Measured now, against the parts that stay at this error: fewer as the error grows,
+            // so the distance only grows and is a lower bound for the next look.
+            let size = self.radius[p].max(self.distance_to_staying(part, error));
+            if size > error {
+                self.waiting.push(Reverse((size.to_bits(), part)));
+                continue;
+            }
             let faces = &self.faces[self.face_start[p] as usize..self.face_start[p + 1] as usize];
             let alive = faces.iter().filter(|&&f| state.face_alive[f as usize]).count();
             if faces_alive < target + taken + alive {
@@ -239,6 +264,7 @@ impl<'m> Parts<'m> {
                 }
             }
             taken += alive;
+            self.present[p] = false;
             self.removed += 1;
         }
         taken
