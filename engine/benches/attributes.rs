@@ -108,6 +108,7 @@ fn main() {
     let mut prune_rows = Vec::new();
     for path in assets {
         let mesh = read_mesh(&path).expect("reads");
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("?");
         let first = SimplifyOptions { target_ratio: Some(0.9), ..Default::default() };
         let input = peer_input(&mesh);
         let reached = simplify(&mesh, &first).expect("simplifies").mesh.face_count();
@@ -145,7 +146,7 @@ fn main() {
         };
         appearance_rows.push(format!(
             "| {} | {} / {} | {} / {} | {} / {} | {} / {} | {} / {} | {} / {} |",
-            path.file_name().and_then(|n| n.to_str()).unwrap_or("?"),
+            name,
             cell(a_ours.uv_texels, |s| s.mean),
             cell(a_theirs.uv_texels, |s| s.mean),
             cell(a_ours.uv_texels, |s| s.p95),
@@ -172,7 +173,6 @@ fn main() {
         };
         // Each variant's row starts with the asset, its faces, and its position error and time
         // over meshoptimizer's.
-        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("?");
         let lead = |out: &Simplified, time: f64| {
             format!("| {name} | {} | {:.2} | {:.2} |", out.mesh.face_count(), error(&out.mesh) / e_theirs, time)
         };
@@ -200,7 +200,7 @@ fn main() {
         size_rows.push(quantized_row(&path, &ours.mesh));
         println!(
             "| {} | {} | {} | {} ({}) | {} | {} / {} | {:.5} | {:.5} | {:.2} | {:.1} ms | {:.1} ms | {:.2} |",
-            path.file_name().and_then(|n| n.to_str()).unwrap_or("?"),
+            name,
             mesh.corners.names().join(", "),
             mesh.face_count(),
             reached,

@@ -150,16 +150,14 @@ fn run_simplify(executor: &dyn Executor, args: &SimplifyArgs) -> Result<()> {
     if args.json {
         return print_json(&report);
     }
-    let holes = match text(&report, "holes_closed").as_str() {
+    // A count the text names only when it is not zero: ", 1 {one}" or ", N {many}".
+    let counted = |key: &str, one: &str, many: &str| match text(&report, key).as_str() {
         "0" => String::new(),
-        "1" => ", 1 triangular hole closed".into(),
-        n => format!(", {n} triangular holes closed"),
+        "1" => format!(", 1 {one}"),
+        n => format!(", {n} {many}"),
     };
-    let parts = match text(&report, "parts_removed").as_str() {
-        "0" => String::new(),
-        "1" => ", 1 part taken out".into(),
-        n => format!(", {n} parts taken out"),
-    };
+    let holes = counted("holes_closed", "triangular hole closed", "triangular holes closed");
+    let parts = counted("parts_removed", "part taken out", "parts taken out");
     out!(
         "{} → {} faces, {} → {} vertices ({}): {} collapses, {} refused, {} frozen vertices{holes}{parts}",
         text(&report, "faces_in"),

@@ -194,7 +194,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     // 4. Every edge queued.
     let heap = run::initial_queue(&state, edges, faces_in);
     // 5. The loop (with the parts it may take out whole, when asked to).
-    let parts = options.prune.then(|| prune::Parts::new(&prepared, &units));
+    let parts = options.prune.then(|| prune::Parts::new(&prepared, &units)).flatten();
     let run = run::run(&mut state, heap, parts, &units, faces_in, target)?;
     // 6. Outputs. The guard's tree and tables are done with: their memory goes back first.
     state.guard = None;

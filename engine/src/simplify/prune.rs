@@ -27,6 +27,7 @@ use glam::DVec3;
 
 use crate::bvh::TriangleBvh;
 use crate::mesh::{DistanceUnits, Mesh};
+use crate::topology::{Csr, UnionFind};
 
 use super::kernel::State;
 
@@ -36,96 +37,42 @@ pub(super) struct Parts<'m> {
     units: DistanceUnits,
     /// Per part, its triangles and bounding box, built at the first distance measured.
     shapes: Vec<(TriangleBvh, DVec3, DVec3)>,
-    /// (radius in paper units, part): every part but the one with the most faces, smallest first.
-    by_radius: Vec<(f64, u32)>,
     /// Per part, its radius in paper units (infinite for the one with the most faces, which
     /// stays), and whether it is still there.
     radius: Vec<f64>,
     present: Vec<bool>,
+    /// Every part but the one with the most faces, smallest radius first.
+    by_radius: Vec<u32>,
     /// The next entry of `by_radius` whose radius the error has not reached.
     next: usize,
     /// Parts within the error by radius, by a lower bound of their size (paper units, as bits:
     /// non-negative floats order as their bits do).
     waiting: BinaryHeap<Reverse<(u64, u32)>>,
-    /// Per part, its faces: `faces[face_start[p]..face_start[p + 1]]`.
-    face_start: Vec<u32>,
-    faces: Vec<u32>,
-    /// Per part, its vertices, in the same layout.
-    vertex_start: Vec<u32>,
-    vertices: Vec<u32>,
+    /// Per part, its faces and its vertices.
+    faces: Csr<u32>,
+    vertices: Csr<u32>,
     /// Set once a part would have taken the face count below the target: nothing more goes.
     done: bool,
     /// Parts taken out so far.
     pub(super) removed: usize,
 }
 
-/// The root of `v` in a union-find forest, halving the path on the way.
-fn root(parent: &mut [u32], mut v: u32) -> u32 {
-    while parent[v as usize] != v {
-        parent[v as usize] = parent[parent[v as usize] as usize];
-        v = parent[v as usize];
-    }
-    v
-}
-
-/// Items grouped by part: the start of each part's run and the items in part order.
-fn grouped(part_of: impl Iterator<Item = u32> + Clone, parts: usize) -> (Vec<u32>, Vec<u32>) {
-    let mut start = vec![0u32; parts + 1];
-    for p in part_of.clone() {
-        start[p as usize + 1] += 1;
-    }
-    for p in 0..parts {
-        start[p + 1] += start[p];
-    }
-    let mut fill = start.clone();
-    let mut items = vec![0u32; start[parts] as usize];
-    for (i, p) in part_of.enumerate() {
-        items[fill[p as usize] as usize] = i as u32;
-        fill[p as usize] += 1;
-    }
-    (start, items)
-}
-
 impl<'m> Parts<'m> {
-    /// The parts of `mesh` (every vertex on a face, as a prepared mesh has them).
-    pub(super) fn new(mesh: &'m Mesh, units: &DistanceUnits) -> Parts<'m> {
+    /// The parts of `mesh` (every vertex on a face, as a prepared mesh has them); `None` for one
+    /// part (the usual input), which stays.
+    pub(super) fn new(mesh: &'m Mesh, units: &DistanceUnits) -> Option<Parts<'m>> {
         let n = mesh.vertex_count();
-        let mut parent: Vec<u32> = (0..n as u32).collect();
+        let mut sets = UnionFind::new(n);
         for t in &mesh.triangles {
-            let mut x = root(&mut parent, t[0]);
-            for &v in &t[1..] {
-                let y = root(&mut parent, v);
-                if x != y {
-                    parent[x.max(y) as usize] = x.min(y);
-                    x = x.min(y);
-                }
-            }
-        }
-        // One part (the usual input): it stays, and there is nothing else to look at.
-        if (0..n as u32).filter(|&v| parent[v as usize] == v).take(2).count() < 2 {
-            return Parts {
-                mesh,
-                units: *units,
-                shapes: Vec::new(),
-                by_radius: Vec::new(),
-                radius: Vec::new(),
-                present: Vec::new(),
-                next: 0,
-                waiting: BinaryHeap::new(),
-                face_start: vec![0],
-                faces: Vec::new(),
-                vertex_start: vec![0],
-                vertices: Vec::new(),
-                done: true,
-                removed: 0,
-            };
+            sets.union(t[0], t[1]);
+            sets.union(t[0], t[2]);
         }
         // Dense part numbers, in the order of each part's lowest vertex.
         let mut number = vec![u32::MAX; n];
         let mut part_of_vertex = vec![0u32; n];
         let mut parts = 0u32;
         for v in 0..n as u32 {
-            let r = root(&mut parent, v) as usize;
+            let r = sets.find(v) as usize;
             if number[r] == u32::MAX {
                 number[r] = parts;
                 parts += 1;
@@ -133,44 +80,42 @@ impl<'m> Parts<'m> {
             part_of_vertex[v as usize] = number[r];
         }
         let parts = parts as usize;
-        let (vertex_start, vertices) = grouped(part_of_vertex.iter().copied(), parts);
-        let face_part = mesh.triangles.iter().map(|t| part_of_vertex[t[0] as usize]);
-        let (face_start, faces) = grouped(face_part, parts);
-        let face_count = |p: usize| face_start[p + 1] - face_start[p];
-        let largest = (0..parts).max_by_key(|&p| (face_count(p), Reverse(p)));
-        let mut by_radius: Vec<(f64, u32)> = (0..parts)
-            .filter(|&p| Some(p) != largest)
+        if parts < 2 {
+            return None;
+        }
+        let vertices = Csr::from_pairs(parts, (0..n as u32).map(|v| (part_of_vertex[v as usize] as usize, v)));
+        let face_part = |f: usize| part_of_vertex[mesh.triangles[f][0] as usize] as usize;
+        let faces = Csr::from_pairs(parts, (0..mesh.face_count()).map(|f| (face_part(f), f as u32)));
+        let largest = (0..parts).max_by_key(|&p| (faces.get(p).len(), Reverse(p)));
+        let radius: Vec<f64> = (0..parts)
             .map(|p| {
-                let members = &vertices[vertex_start[p] as usize..vertex_start[p + 1] as usize];
+                if Some(p) == largest {
+                    return f64::INFINITY;
+                }
                 let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-                for &v in members {
+                for &v in vertices.get(p) {
                     let q = mesh.point(v);
                     (lo, hi) = (lo.min(q), hi.max(q));
                 }
-                (units.to_paper(0.5 * (hi - lo).length()), p as u32)
+                units.to_paper(0.5 * (hi - lo).length())
             })
             .collect();
-        let mut radius = vec![f64::INFINITY; parts];
-        for &(r, p) in &by_radius {
-            radius[p as usize] = r;
-        }
-        by_radius.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        Parts {
+        let mut by_radius: Vec<u32> = (0..parts as u32).filter(|&p| Some(p as usize) != largest).collect();
+        by_radius.sort_by(|&a, &b| radius[a as usize].total_cmp(&radius[b as usize]).then(a.cmp(&b)));
+        Some(Parts {
             mesh,
             units: *units,
             shapes: Vec::new(),
-            by_radius,
-            radius,
             present: vec![true; parts],
+            radius,
+            by_radius,
             next: 0,
             waiting: BinaryHeap::new(),
-            face_start,
             faces,
-            vertex_start,
             vertices,
             done: false,
             removed: 0,
-        }
+        })
     }
 
     /// How far part `p`'s farthest vertex is from the triangles of the parts that stay at `error`
@@ -179,14 +124,14 @@ impl<'m> Parts<'m> {
         let mesh = self.mesh;
         if self.shapes.is_empty() {
             let mut local = vec![0u32; mesh.vertex_count()];
-            for part in 0..self.vertex_start.len() - 1 {
-                let members = &self.vertices[self.vertex_start[part] as usize..self.vertex_start[part + 1] as usize];
+            for part in 0..self.vertices.len() {
+                let members = self.vertices.get(part);
                 let mut positions = Vec::with_capacity(members.len());
                 for &v in members {
                     local[v as usize] = positions.len() as u32;
                     positions.push(mesh.positions[v as usize]);
                 }
-                let faces = &self.faces[self.face_start[part] as usize..self.face_start[part + 1] as usize];
+                let faces = self.faces.get(part);
                 let triangles = faces.iter().map(|&f| mesh.triangles[f as usize].map(|v| local[v as usize])).collect();
                 let piece = Mesh::new(positions, triangles).expect("a part of a checked mesh");
                 let bounds = piece.bounds().expect("a part has faces");
@@ -194,15 +139,15 @@ impl<'m> Parts<'m> {
                 self.shapes.push((bvh, DVec3::from(bounds.min), DVec3::from(bounds.max)));
             }
         }
-        let members =
-            &self.vertices[self.vertex_start[p as usize] as usize..self.vertex_start[p as usize + 1] as usize];
+        let staying: Vec<usize> =
+            (0..self.shapes.len()).filter(|&j| j != p as usize && self.present[j] && self.radius[j] > error).collect();
         let mut far: f64 = 0.0;
-        let mut order = Vec::with_capacity(self.shapes.len());
-        for &v in members {
+        let mut order = Vec::with_capacity(staying.len());
+        for &v in self.vertices.get(p as usize) {
             let q = mesh.point(v);
             order.clear();
-            let stays = |j: usize| j != p as usize && self.present[j] && self.radius[j] > error;
-            for (j, (_, lo, hi)) in self.shapes.iter().enumerate().filter(|&(j, _)| stays(j)) {
+            for &j in &staying {
+                let (_, lo, hi) = &self.shapes[j];
                 order.push(((*lo - q).max(q - *hi).max(DVec3::ZERO).length_squared(), j));
             }
             order.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -225,7 +170,8 @@ impl<'m> Parts<'m> {
         if self.done {
             return 0;
         }
-        while let Some(&(radius, part)) = self.by_radius.get(self.next) {
+        while let Some(&part) = self.by_radius.get(self.next) {
+            let radius = self.radius[part as usize];
             if radius > error {
                 break;
             }
@@ -246,7 +192,7 @@ impl<'m> Parts<'m> {
                 self.waiting.push(Reverse((size.to_bits(), part)));
                 continue;
             }
-            let faces = &self.faces[self.face_start[p] as usize..self.face_start[p + 1] as usize];
+            let faces = self.faces.get(p);
             let alive = faces.iter().filter(|&&f| state.face_alive[f as usize]).count();
             if faces_alive < target + taken + alive {
                 self.done = true;
@@ -255,7 +201,7 @@ impl<'m> Parts<'m> {
             for &f in faces {
                 state.face_alive[f as usize] = false;
             }
-            for &v in &self.vertices[self.vertex_start[p] as usize..self.vertex_start[p + 1] as usize] {
+            for &v in self.vertices.get(p) {
                 if state.vertex_alive[v as usize] {
                     state.vertex_alive[v as usize] = false;
                     state.fans[v as usize] = Default::default();
