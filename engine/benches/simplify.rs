@@ -1,5 +1,6 @@
 //! Simplification benchmark: meshlod (its defaults, w = 0 with the fan-distance term, unless a line
-//! says otherwise; progressive-mesh records on) beside meshoptimizer at the same target face count,
+//! says otherwise; progressive-mesh records on but in the lines "without progressive-mesh
+//! records", which is how `simplify` runs unless the progressive mesh is asked for) beside meshoptimizer at the same target face count,
 //! in one process, single-threaded but for the lines "on two threads" (meshlod called from a pool of
 //! two, where its setup's passes run side by side; meshoptimizer on one).
 //! Prints one standard line per case:
@@ -38,6 +39,9 @@ enum Variant {
     Guard,
     /// The defaults, called from a pool of two threads (the setup's passes run side by side).
     TwoThreads,
+    /// The defaults without progressive-mesh records: `simplify` as a caller runs it unless it
+    /// asks for the progressive mesh (`--pm`, gRPC `return_progressive`).
+    NoRecords,
 }
 
 fn case(name: &str, mesh: &Mesh, keep: f64, runs: usize, measure_error: bool, variant: Variant) {
@@ -53,6 +57,7 @@ fn case(name: &str, mesh: &Mesh, keep: f64, runs: usize, measure_error: bool, va
         Variant::Default | Variant::TwoThreads => defaults,
         Variant::Paper(w) => SimplifyOptions { metric: Metric::Qfvp { w }, distance_term: 0.0, ..defaults },
         Variant::Guard => SimplifyOptions { guard: 1.0, ..defaults },
+        Variant::NoRecords => SimplifyOptions { record_progressive: false, ..defaults },
     };
     // The other lines run on the calling thread, the global pool having one thread.
     let two = matches!(variant, Variant::TwoThreads)
@@ -102,6 +107,11 @@ fn main() {
                 for keep in [0.1, 0.01] {
                     case(&format!("{name} keep {:.0}%", keep * 100.0), &mesh, keep, runs, true, Variant::Default);
                 }
+                // Without the records (what a caller gets who does not ask for the progressive mesh).
+                for keep in [0.1, 0.01] {
+                    let label = format!("{name} keep {:.0}% without progressive-mesh records", keep * 100.0);
+                    case(&label, &mesh, keep, runs, false, Variant::NoRecords);
+                }
                 // Where the caller's pool has two threads (meshoptimizer still on one).
                 case(&format!("{name} keep 1% on two threads"), &mesh, 0.01, runs, false, Variant::TwoThreads);
                 // The paper's cost, at the default w and at the paper's w = 1: the fan-distance
@@ -126,12 +136,8 @@ fn main() {
         }
         None => ("procedural torus", procedural::torus(1414, 707, 0.3)),
     };
-    case(
-        &format!("{label} ({} M) keep 1%", big.face_count() as f64 / 1e6),
-        &big,
-        0.01,
-        if quick { 1 } else { 2 },
-        false,
-        Variant::Default,
-    );
+    for (variant, records) in [(Variant::Default, ""), (Variant::NoRecords, " without progressive-mesh records")] {
+        let name = format!("{label} ({} M) keep 1%{records}", big.face_count() as f64 / 1e6);
+        case(&name, &big, 0.01, if quick { 1 } else { 2 }, false, variant);
+    }
 }

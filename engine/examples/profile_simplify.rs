@@ -1,6 +1,6 @@
 //! Runs simplifications for profiling and for checking that a speed change kept the output.
 //!
-//! `cargo run --release -p meshlod-engine --example profile_simplify -- FILE [KEEP] [REPEAT] [--peer] [--guard] [--no-distance-term] [--digest]`
+//! `cargo run --release -p meshlod-engine --example profile_simplify -- FILE [KEEP] [REPEAT] [--peer] [--guard] [--no-distance-term] [--no-progressive] [--digest]`
 //!
 //! - default: the engine's defaults (QFVP w = 0 with the fan-distance term) with progressive-mesh
 //!   records (the simplify bench's case) to KEEP of the faces (default 0.1), REPEAT times
@@ -9,6 +9,7 @@
 //! - `--peer`: meshoptimizer's `simplify` on the same mesh and target instead.
 //! - `--guard`: w = 0 (the default) with the distance guard at weight 1.
 //! - `--no-distance-term`: the fan-distance term off (the cost as the paper has it).
+//! - `--no-progressive`: without progressive-mesh records (`simplify`'s own default).
 //! - `--digest`: one hash per (w, placement) of the output mesh and the vertex splits, and one for
 //!   Melax: a change meant to be output-preserving must print the same lines before and after.
 
@@ -29,7 +30,7 @@ fn options(mesh: &Mesh, keep: f64, metric: Metric, placement: Placement) -> Simp
         target_ratio: None,
         metric,
         placement,
-        record_progressive: true,
+        record_progressive: !std::env::args().any(|a| a == "--no-progressive"),
         ..defaults
     }
 }
@@ -63,7 +64,9 @@ fn main() {
     let flag = |name: &str| args.iter().any(|a| a == name);
     let positional: Vec<&String> = args.iter().filter(|a| !a.starts_with("--")).collect();
     let Some(path) = positional.first() else {
-        eprintln!("usage: profile_simplify FILE [KEEP] [REPEAT] [--peer] [--guard] [--no-distance-term] [--digest]");
+        eprintln!(
+            "usage: profile_simplify FILE [KEEP] [REPEAT] [--peer] [--guard] [--no-distance-term] [--no-progressive] [--digest]"
+        );
         std::process::exit(2);
     };
     let mesh = prepare(&meshlod_engine::io::read_mesh(path.as_str()).expect("reads")).0;

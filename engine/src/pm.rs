@@ -137,6 +137,19 @@ pub(crate) struct CollapseRecord {
     pub error: f32,
 }
 
+impl CollapseRecord {
+    /// The third corners of the split that undoes this collapse, `vl` and `vr` (in the
+    /// simplifier's numbering), and which of them is a closed hole's corner: that corner takes the
+    /// side without a face.
+    fn split_corners(&self) -> (u32, u32, Hole) {
+        match (self.hole, self.left) {
+            (NO_VERTEX, _) => (self.left, self.right, Hole::None),
+            (corner, NO_VERTEX) => (corner, self.right, Hole::Left),
+            (corner, _) => (self.left, corner, Hole::Right),
+        }
+    }
+}
+
 /// Which of a split's `vl` and `vr` is the third corner of a triangular hole that the split opens
 /// again rather than of a face it adds (see the module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
@@ -233,19 +246,21 @@ pub struct ProgressiveMesh {
 }
 
 impl ProgressiveMesh {
-    /// Builds the progressive mesh from the simplifier's collapse log.
+    /// Builds the progressive mesh from the simplifier's collapse log, which it takes over: the
+    /// vertex splits are written where the records were (a split is smaller than a record), so
+    /// the records' memory is not needed twice.
     pub(crate) fn from_log(
         prepared: &Mesh,
         input_vertex: &[u32],
         final_position: impl Fn(u32) -> [f32; 3],
         final_triangles: &[[u32; 3]],
         face_alive: &[bool],
-        log: &[CollapseRecord],
+        log: Vec<CollapseRecord>,
         attribute_log: Option<AttributeLog<'_>>,
     ) -> ProgressiveMesh {
         let n = prepared.vertex_count();
         let mut removed = vec![false; n];
-        for r in log {
+        for r in &log {
             removed[r.removed as usize] = true;
         }
         let mut vertex_map = vec![NO_VERTEX; n];
@@ -269,17 +284,18 @@ impl ProgressiveMesh {
             .collect();
         let mut face_counts = Vec::with_capacity(log.len() + 1);
         face_counts.push(base_triangles.len() as u32);
-        let splits: Vec<VertexSplit> = log
-            .iter()
-            .rev()
+        for r in log.iter().rev() {
+            let (left, right, hole) = r.split_corners();
+            face_counts.push(face_counts.last().expect("non-empty") + faces_added(left, right, hole) as u32);
+        }
+        let attributes =
+            attribute_log.map(|a| PmAttributes::from_log(a, final_triangles, face_alive, &log, &face_counts));
+        // In the records' order, then turned round: the last collapse is the first split.
+        let mut splits: Vec<VertexSplit> = log
+            .into_iter()
             .map(|r| {
-                // A closed hole's corner takes the side without a face.
-                let (left, right, hole) = match (r.hole, r.left) {
-                    (NO_VERTEX, _) => (r.left, r.right, Hole::None),
-                    (corner, NO_VERTEX) => (corner, r.right, Hole::Left),
-                    (corner, _) => (r.left, corner, Hole::Right),
-                };
-                let split = VertexSplit {
+                let (left, right, hole) = r.split_corners();
+                VertexSplit {
                     vs: map(r.survivor),
                     vl: map(left),
                     vr: map(right),
@@ -288,14 +304,11 @@ impl ProgressiveMesh {
                     split_position: r.survivor_position,
                     collapsed_position: r.collapsed_position,
                     error: r.error,
-                };
-                face_counts.push(face_counts.last().expect("non-empty") + split.added_faces() as u32);
-                split
+                }
             })
             .collect();
+        splits.reverse();
         let input_vertex = order.iter().map(|&v| input_vertex[v as usize]).collect();
-        let attributes =
-            attribute_log.map(|a| PmAttributes::from_log(a, final_triangles, face_alive, log, &face_counts));
         let mut base = Mesh { positions: base_positions, triangles: base_triangles, corners: Default::default() };
         if let Some(attributes) = &attributes {
             base.corners = attributes.values.pick(attributes.base.iter().flatten().map(|&k| k as usize));

@@ -51,6 +51,9 @@ pub(crate) struct State<'o> {
     /// Scratch for the fold check: for a ring vertex x, the index in `fan_scratch` of the face
     /// whose far edge starts at x (valid only where that face's far edge does start at x).
     pub(super) spoke: Vec<u32>,
+    /// Vertices on a border or frozen at the start: a collapse that takes one face instead of two
+    /// removes one of them, so they bound how far the run's log outgrows half the faces removed.
+    pub(super) open_vertices: usize,
     /// Counts the calls of `is_legal`: a [`Legal`] token from the latest call (the one whose new
     /// face normals `fan_scratch` holds) carries the current count.
     pub(super) check_id: u32,
@@ -202,7 +205,9 @@ impl<'o> State<'o> {
             || face_pass(mesh),
         );
         let lock = options.boundary == BoundaryMode::Lock;
+        let mut open_vertices = 0;
         for (vertex, kind) in vertices.iter_mut().zip(kind) {
+            open_vertices += matches!(kind, VertexKind::Boundary | VertexKind::Frozen) as usize;
             vertex.kind = match kind {
                 VertexKind::Boundary if lock => VertexKind::Anchored,
                 kind => kind,
@@ -229,6 +234,7 @@ impl<'o> State<'o> {
             mark_stamp: 0,
             fan_scratch: Vec::new(),
             spoke: vec![0; vertex_count],
+            open_vertices,
             check_id: 0,
             cos_max_normal_change: options.max_normal_change_degrees.to_radians().cos(),
             guard: None,

@@ -195,7 +195,9 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     let heap = run::initial_queue(&state, edges, faces_in);
     // 5. The loop (with the parts it may take out whole, when asked to).
     let parts = options.prune.then(|| prune::Parts::new(&prepared, &units)).flatten();
-    let run = run::run(&mut state, heap, parts, &units, faces_in, target)?;
+    let mut run = run::run(&mut state, heap, parts, &units, faces_in, target)?;
+    let collapses = run.log.len();
+    let holes_closed = run.log.iter().filter(|r| r.hole != crate::pm::NO_VERTEX).count();
     // 6. Outputs. The guard's tree and tables are done with: their memory goes back first.
     state.guard = None;
     state.rebuild_triangles(&prepared, &run.log);
@@ -212,7 +214,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
                     |v| state.vertices[v as usize].position,
                     &state.triangles,
                     &state.face_alive,
-                    &run.log,
+                    std::mem::take(&mut run.log),
                     (!state.corner_source.is_empty()).then(|| crate::pm::AttributeLog {
                         values: &state.attributes,
                         corner_source: &state.corner_source,
@@ -233,13 +235,13 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
         vertices_out: simplified.vertex_count(),
         target_faces: target,
         placement: options.placement,
-        collapses: run.log.len(),
+        collapses,
         stop_reason: run.stop_reason,
         max_collapse_error: run.max_collapse_error,
         rejected: run.refused.total(),
         refused: run.refused,
         frozen_vertices,
-        holes_closed: run.log.iter().filter(|r| r.hole != crate::pm::NO_VERTEX).count(),
+        holes_closed,
         parts_removed: run.parts_removed,
         dropped_degenerate_faces: dropped,
         distance_term: state.fan_term,
