@@ -247,8 +247,8 @@ pub struct ProgressiveMesh {
 
 impl ProgressiveMesh {
     /// Builds the progressive mesh from the simplifier's collapse log, which it takes over: the
-    /// vertex splits are written where the records were (a split is smaller than a record), so
-    /// the records' memory is not needed twice.
+    /// vertex splits are collected from the records in place (`Vec`'s in-place collection, a split
+    /// being smaller than a record), so the run's largest array is not held twice.
     pub(crate) fn from_log(
         prepared: &Mesh,
         input_vertex: &[u32],
