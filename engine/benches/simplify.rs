@@ -1,8 +1,9 @@
 //! Simplification benchmark: meshlod (its defaults, w = 0 with the fan-distance term, unless a line
 //! says otherwise; progressive-mesh records on but in the lines "without progressive-mesh
 //! records", which is how `simplify` runs unless the progressive mesh is asked for) beside
-//! meshoptimizer at the same target face count, in one process, single-threaded but for the lines "on two threads" (meshlod called from a pool of
-//! two, where its setup's passes run side by side; meshoptimizer on one).
+//! meshoptimizer at the same target face count, in one process, single-threaded but for the lines
+//! "on two threads" (meshlod called from a pool of two, where its setup's passes run side by side;
+//! meshoptimizer on one).
 //! Prints one standard line per case:
 //! `input → output triangles, error, time, peer time, ratio`, plus throughput and peak memory.
 //!
