@@ -460,7 +460,7 @@ impl CornerAttributes {
                     reason: format!("{} per-corner values for {corner_count} corners", values.len()),
                 });
             }
-            if let Some(corner) = values.iter().position(|v| v.iter().any(|c| !c.is_finite())) {
+            if let Some(corner) = first_non_finite(values) {
                 return Err(MeshError::InvalidParameter {
                     name,
                     reason: format!("corner {corner} (face {}) has a non-finite value", corner / 3),
@@ -545,15 +545,18 @@ impl Mesh {
 
     /// Checks the invariants documented on [`Mesh`].
     pub fn check(&self) -> Result<(), MeshError> {
-        for (vertex, p) in self.positions.iter().enumerate() {
-            if let Some(value) = p.iter().find(|c| !c.is_finite()) {
-                return Err(MeshError::NonFiniteCoordinate { vertex, value: value.to_string() });
-            }
+        if let Some(vertex) = first_non_finite(&self.positions) {
+            let value = self.positions[vertex].iter().find(|c| !c.is_finite()).expect("a non-finite coordinate");
+            return Err(MeshError::NonFiniteCoordinate { vertex, value: value.to_string() });
         }
         let vertex_count = self.positions.len();
-        for (face, t) in self.triangles.iter().enumerate() {
-            if let Some(&index) = t.iter().find(|&&i| i as usize >= vertex_count) {
-                return Err(MeshError::IndexOutOfRange { face, index: index as i64, vertex_count });
+        // The largest index first, in one pass without a branch per index; the face only on failure.
+        let largest = self.triangles.iter().flatten().fold(0u32, |m, &i| m.max(i));
+        if largest as usize >= vertex_count {
+            for (face, t) in self.triangles.iter().enumerate() {
+                if let Some(&index) = t.iter().find(|&&i| i as usize >= vertex_count) {
+                    return Err(MeshError::IndexOutOfRange { face, index: index as i64, vertex_count });
+                }
             }
         }
         self.corners.check(3 * self.triangles.len())
@@ -669,4 +672,11 @@ impl DistanceUnits {
     pub fn from_paper(&self, paper: f64) -> f64 {
         paper * self.largest_side / 2.0
     }
+}
+
+/// The first of `values` with a component that is not finite: one pass without a branch per
+/// component (validation reads every value of every mesh), the position only on failure.
+fn first_non_finite<const N: usize>(values: &[[f32; N]]) -> Option<usize> {
+    let all_finite = values.iter().flatten().fold(true, |ok, c| ok & c.is_finite());
+    if all_finite { None } else { values.iter().position(|v| v.iter().any(|c| !c.is_finite())) }
 }
