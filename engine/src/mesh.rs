@@ -546,7 +546,7 @@ impl Mesh {
     /// Checks the invariants documented on [`Mesh`].
     pub fn check(&self) -> Result<(), MeshError> {
         if let Some(vertex) = first_non_finite(&self.positions) {
-            let value = self.positions[vertex].iter().find(|c| !c.is_finite()).expect("a non-finite coordinate");
+            let value = self.positions[vertex].into_iter().find(|c| !c.is_finite()).unwrap_or(f32::NAN);
             return Err(MeshError::NonFiniteCoordinate { vertex, value: value.to_string() });
         }
         let vertex_count = self.positions.len();
