@@ -83,8 +83,7 @@ fn rank_block(state: &State, edges: &[[u32; 2]]) -> Vec<QueueEntry> {
 /// two faces, or one face and a vertex on a border (or frozen; `open_vertices` at the start, and
 /// collapses make no new ones): at most half the faces to remove plus half the open vertices (one
 /// more for the last collapse's overshoot), and never more than the vertices. The log is sized
-/// so up front: one that outgrew its reserve was copied whole into one twice its size (ogre and
-/// the bunny to 1%, by a few dozen records).
+/// so up front: one that outgrows its reserve is copied whole into one twice its size.
 pub(super) fn log_reserve(faces_in: usize, target: usize, open_vertices: usize, vertex_count: usize) -> usize {
     ((faces_in - target.min(faces_in) + open_vertices) / 2 + 1).min(vertex_count)
 }
