@@ -4,8 +4,6 @@
 //! what can be repaired without guessing (exact duplicates and degenerate faces) and leaves the rest
 //! (non-manifold edges and vertices, holes) to be reported and handled by the algorithms.
 
-use std::collections::HashMap;
-
 use serde::Serialize;
 
 use crate::mesh::{Bounds, Mesh};
@@ -121,7 +119,7 @@ pub fn validate(mesh: &Mesh) -> MeshReport {
         .filter(|&v| on_non_manifold_edge[v] || fan_count(mesh, &topology, v as u32) > 1)
         .count();
 
-    let boundary_loops = count_boundary_loops(mesh, &topology);
+    let boundary_loops = count_boundary_loops(&topology);
 
     let mut sets = UnionFind::new(mesh.vertex_count());
     for t in tris {
@@ -213,78 +211,66 @@ pub(crate) fn fan_count(mesh: &Mesh, topology: &Topology, v: u32) -> usize {
     fans as usize
 }
 
-/// Counts boundary loops: closed walks over boundary half-edges (each in its face's direction).
+/// Counts boundary loops: closed walks over the boundary edges (edges with one face).
 ///
-/// At a vertex where several boundary loops touch (a pinched, non-manifold vertex) the walk leaves
-/// through the boundary half-edge of the same fan as the one it arrived by, found by turning around
-/// the vertex through its faces, so the count does not depend on the order of the edge table.
-fn count_boundary_loops(mesh: &Mesh, topology: &Topology) -> usize {
-    let tris = &mesh.triangles;
-    // Boundary half-edges: (face, corner) with edge t[corner] → t[corner + 1].
-    let mut outgoing: HashMap<u32, Vec<(u32, u8)>> = HashMap::new();
-    let mut used: HashMap<(u32, u8), bool> = HashMap::new();
-    for (e, _) in topology.edges.iter().enumerate() {
-        let faces = topology.edge_faces.get(e);
-        if faces.len() != 1 {
-            continue;
-        }
-        let f = faces[0].0;
-        let corner = topology.face_edges[f as usize].iter().position(|&x| x == e as u32).expect("edge of its face");
-        outgoing.entry(tris[f as usize][corner]).or_default().push((f, corner as u8));
-        used.insert((f, corner as u8), false);
-    }
-    // From the boundary half-edge (f, c) ending at v, turn around v through faces until the next
-    // boundary half-edge leaving v.
-    let next_in_fan = |f: u32, c: u8| -> Option<(u32, u8)> {
-        let (mut face, mut corner) = (f, (c as usize + 1) % 3); // corner of v in face
-        for _ in 0..tris.len() {
-            let t = tris[face as usize];
-            let e = topology.face_edges[face as usize][corner];
-            if e == NO_EDGE {
-                return None;
-            }
-            let faces = topology.edge_faces.get(e as usize);
-            match faces.len() {
-                1 => return Some((face, corner as u8)),
-                2 => {
-                    let other = if faces[0].0 == face { faces[1].0 } else { faces[0].0 };
-                    let v = t[corner];
-                    let w = t[(corner + 1) % 3];
-                    // In the other face the edge runs w → v; continue at v's corner there, whose
-                    // outgoing edge is the next one around v.
-                    let u = tris[other as usize];
-                    let wc = u.iter().position(|&x| x == w)?;
-                    if u[(wc + 1) % 3] != v {
-                        return None; // inconsistent orientation: no well-defined turn
-                    }
-                    face = other;
-                    corner = (wc + 1) % 3;
+/// The walk follows the edges whichever way their faces run, so a loop along which the
+/// orientation flips (a strip of faces turned over) is one loop, not one per start. At a vertex
+/// with two boundary edges it goes on along the other one. At a vertex where several loops touch
+/// (pinched, non-manifold) it leaves along the boundary edge of the same fan as the one it arrived
+/// by, found by turning around the vertex through its faces; where that turn is not defined (an
+/// edge with more than two faces) along any unused boundary edge there. The count does not depend
+/// on the order of the vertices or faces, except where such an undefined turn leaves a choice.
+fn count_boundary_loops(topology: &Topology) -> usize {
+    let on_boundary = |e: u32| topology.edge_faces.get(e as usize).len() == 1;
+    let boundary: Vec<u32> = (0..topology.edges.len() as u32).filter(|&e| on_boundary(e)).collect();
+    let vertex_count = topology.vertex_faces.len();
+    let at_vertex = crate::topology::Csr::from_pairs(
+        vertex_count,
+        boundary.iter().flat_map(|&e| topology.edges[e as usize].map(|v| (v as usize, e))),
+    );
+    let mut used = vec![false; topology.edges.len()];
+    // The other edge at `v` of the face whose edge at `v` is `e`.
+    let other_edge_at = |face: usize, e: u32, v: u32| -> Option<u32> {
+        let t = topology.face_edges[face];
+        (0..3).map(|k| t[k]).find(|&x| x != e && x != NO_EDGE && topology.edges[x as usize].contains(&v))
+    };
+    // The boundary edge of the fan at `v` that `e` (a boundary edge at `v`) bounds on its other
+    // side: turn from `e`'s face across the edges at `v` with two faces.
+    let turn = |e: u32, v: u32| -> Option<u32> {
+        let mut face = topology.edge_faces.get(e as usize)[0].index();
+        let mut from = e;
+        for _ in 0..=topology.vertex_faces.get(v as usize).len() {
+            let next = other_edge_at(face, from, v)?;
+            match topology.edge_faces.get(next as usize) {
+                [_] => return Some(next),
+                [f, g] => {
+                    face = if f.index() == face { g.index() } else { f.index() };
+                    from = next;
                 }
                 _ => return None,
             }
         }
         None
     };
-    let mut starts: Vec<(u32, u8)> = used.keys().copied().collect();
-    starts.sort_unstable();
     let mut loops = 0;
-    for start in starts {
-        if used[&start] {
+    for &start in &boundary {
+        if used[start as usize] {
             continue;
         }
         loops += 1;
-        let mut at = start;
+        let (mut e, mut v) = (start, topology.edges[start as usize][1]);
         loop {
-            used.insert(at, true);
-            let v = tris[at.0 as usize][(at.1 as usize + 1) % 3];
-            // Through the fan when it is well defined (a used half-edge there closes the loop);
-            // otherwise any unused boundary half-edge leaving v.
-            let next = match next_in_fan(at.0, at.1) {
-                Some(n) => (!used[&n]).then_some(n),
-                None => outgoing.get(&v).and_then(|list| list.iter().copied().find(|n| !used[n])),
+            used[e as usize] = true;
+            let here = at_vertex.get(v as usize);
+            let next = match here {
+                [x, y] => Some(if *x == e { *y } else { *x }),
+                _ => turn(e, v).or_else(|| here.iter().copied().find(|&x| !used[x as usize])),
             };
-            match next {
-                Some(n) => at = n,
+            match next.filter(|&n| !used[n as usize]) {
+                Some(n) => {
+                    let [a, b] = topology.edges[n as usize];
+                    (e, v) = (n, if a == v { b } else { a });
+                }
                 None => break,
             }
         }

@@ -214,6 +214,16 @@ fn round_trips_are_exact() {
     let odd = dir.join("blob.mesh");
     std::fs::write(&odd, &bytes).unwrap();
     assert_eq!(read_mesh(&odd).unwrap().triangles, mesh.triangles);
+    // An OBJ is sniffed by its first statement after the comments; a text whose first line that
+    // is not a comment is no OBJ statement (a Markdown file: its headings start with `#`) is
+    // refused, not read as an empty mesh.
+    let obj = dir.join("commented.mesh");
+    std::fs::write(&obj, "# exported\n\no part\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    assert_eq!(read_mesh(&obj).unwrap().face_count(), 1);
+    let notes = dir.join("README.md");
+    std::fs::write(&notes, "# Meshes\n\nReal meshes for the tests.\n## Sources\n").unwrap();
+    let refused = read_mesh(&notes).unwrap_err();
+    assert!(matches!(refused, MeshError::UnsupportedFormat { .. }), "{refused}");
     // Unknown output extension and missing input file are clear errors.
     assert!(matches!(write_mesh(dir.join("x.stl"), &mesh), Err(MeshError::UnsupportedFormat { .. })));
     let missing = read_mesh(dir.join("missing.obj")).unwrap_err();

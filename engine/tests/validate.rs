@@ -169,3 +169,43 @@ fn a_hub_vertex_is_validated_in_n_log_n() {
     assert_eq!(report.boundary_loops, 1);
     assert!(report.is_manifold_oriented);
 }
+
+#[test]
+fn a_boundary_loop_whose_faces_turn_over_along_it_is_one_loop_in_any_numbering() {
+    // A grid (one boundary loop) with a band of faces from one border to the opposite one wound
+    // the other way: along the loop the faces' direction flips four times. It is still one loop,
+    // and so is the same mesh numbered backwards. Walked only in the faces' direction the count
+    // was 22 here, and it moved with the numbering (a corpus statue read 108 loops, and 70 once
+    // renumbered, for its one loop of 322 edges).
+    let n = 12;
+    let grid = procedural::terrain(n, 1);
+    let mut triangles = grid.triangles.clone();
+    let mut flipped = 0;
+    for t in triangles.iter_mut() {
+        let x = t.iter().map(|&v| grid.positions[v as usize][0]).sum::<f32>() / 3.0;
+        if (0.0..0.3).contains(&x) {
+            t.swap(1, 2);
+            flipped += 1;
+        }
+    }
+    assert!(flipped > 0 && flipped < triangles.len());
+    let mesh = Mesh::new(grid.positions.clone(), triangles.clone()).unwrap();
+    let last = mesh.vertex_count() as u32 - 1;
+    let backwards = Mesh::new(
+        grid.positions.iter().rev().copied().collect(),
+        triangles.iter().rev().map(|t| t.map(|v| last - v)).collect(),
+    )
+    .unwrap();
+    for (name, m) in [("grid", &mesh), ("grid numbered backwards", &backwards)] {
+        let r = validate(m);
+        assert!(r.inconsistently_oriented_edges > 0, "{name}: the band is turned over");
+        assert_eq!(r.boundary_loops, 1, "{name}: {r:?}");
+    }
+    // Two such grids side by side, apart: two loops.
+    let mut positions = mesh.positions.clone();
+    positions.extend(mesh.positions.iter().map(|p| [p[0] + 5.0, p[1], p[2]]));
+    let offset = mesh.vertex_count() as u32;
+    let mut both = triangles.clone();
+    both.extend(triangles.iter().map(|t| t.map(|v| v + offset)));
+    assert_eq!(validate(&Mesh::new(positions, both).unwrap()).boundary_loops, 2);
+}

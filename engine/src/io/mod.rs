@@ -84,12 +84,25 @@ impl MeshFormat {
         let head = &bytes[..bytes.len().min(4096)];
         let is_text =
             head.iter().all(|&b| b == b'\n' || b == b'\r' || b == b'\t' || (0x20..0x7f).contains(&b) || b >= 0x80);
-        let has_obj_statement = head.split(|&b| b == b'\n').any(|line| {
-            let line = line.trim_ascii_start();
-            line.starts_with(b"v ") || line.starts_with(b"f ") || line.starts_with(b"#")
-        });
-        (is_text && has_obj_statement).then_some(MeshFormat::Obj)
+        (is_text && starts_with_obj_statement(bytes)).then_some(MeshFormat::Obj)
     }
+}
+
+/// Statements an OBJ file may begin with (after comments and blank lines).
+const OBJ_KEYWORDS: [&[u8]; 20] = [
+    b"v", b"vt", b"vn", b"vp", b"f", b"l", b"p", b"o", b"g", b"s", b"mtllib", b"usemtl", b"usemap", b"maplib",
+    b"cstype", b"deg", b"curv", b"surf", b"call", b"csh",
+];
+
+/// Whether the first line of `bytes` that is neither blank nor a comment starts with an OBJ
+/// statement. A comment alone does not make a text an OBJ file: a Markdown heading starts
+/// with `#` too.
+fn starts_with_obj_statement(bytes: &[u8]) -> bool {
+    let first = bytes.split(|&b| b == b'\n').map(<[u8]>::trim_ascii).find(|l| !l.is_empty() && !l.starts_with(b"#"));
+    first.is_some_and(|line| {
+        let keyword = line.split(|b| b.is_ascii_whitespace()).next().unwrap_or_default();
+        OBJ_KEYWORDS.contains(&keyword)
+    })
 }
 
 /// Limits that protect a reader from files that claim (or contain) absurd amounts of data, and
