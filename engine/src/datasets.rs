@@ -3,7 +3,7 @@
 //! The meshes are never copied into the repository: they are read from `$MESHLOD_MESHES`, or from
 //! `../shared/meshes` next to the workspace.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Environment variable naming the shared meshes directory.
 pub const MESHES_ENV: &str = "MESHLOD_MESHES";
@@ -84,6 +84,21 @@ pub fn shared_corpus_dir() -> Option<PathBuf> {
 /// when it is missing.
 pub fn require_shared_corpus(test: &str) -> Option<PathBuf> {
     require(test, shared_corpus_dir(), "corpus", CORPUS_ENV)
+}
+
+/// The corpus meshes of at most `max_faces` faces (the count its `MANIFEST.tsv` gives), as (file
+/// name, path), in the manifest's order; empty when the manifest cannot be read.
+pub fn corpus_meshes(dir: &Path, max_faces: usize) -> Vec<(String, PathBuf)> {
+    let manifest = std::fs::read_to_string(dir.join("MANIFEST.tsv")).unwrap_or_default();
+    manifest
+        .lines()
+        .skip(1)
+        .filter_map(|line| {
+            let fields: Vec<&str> = line.split('\t').collect();
+            let faces: usize = fields.get(4)?.parse().ok()?;
+            (faces <= max_faces).then(|| (fields[0].to_string(), dir.join(fields[0])))
+        })
+        .collect()
 }
 
 /// Path of one shared mesh file (`name` without extension), if the directory and the file exist.

@@ -187,54 +187,41 @@ fn shared_meshes_at_99_percent_stay_valid_and_round_trip() {
     }
 }
 
+/// Simplifies by `ratio` every corpus mesh of at most `max_faces` faces that `pick` accepts, and
+/// checks every invariant and the exact round trip; returns how many it checked.
+fn corpus_stays_valid_and_round_trips(dir: &Path, max_faces: usize, ratio: f64, pick: fn(&Mesh) -> bool) -> usize {
+    let mut checked = 0;
+    for (name, path) in meshlod_engine::datasets::corpus_meshes(dir, max_faces) {
+        let mesh = read_mesh(path).unwrap();
+        if !pick(&mesh) {
+            continue;
+        }
+        let out = simplify(&mesh, &options(ratio)).unwrap();
+        assert_valid_output(&name, &mesh, &out);
+        assert_exact_round_trip(&name, &mesh, out.progressive.as_ref().unwrap());
+        checked += 1;
+    }
+    checked
+}
+
 #[test]
 fn non_manifold_corpus_meshes_stay_valid_and_round_trip() {
     // CAD and robot parts with non-manifold edges and vertices (frozen: they never move, and take
     // in neighbours only where rule 1 allows), at 80%: every invariant and the exact round trip.
+    // (The larger ones add time, not cases.)
     let Some(dir) = meshlod_engine::datasets::require_shared_corpus("non_manifold_corpus_meshes") else { return };
-    let manifest = std::fs::read_to_string(dir.join("MANIFEST.tsv")).unwrap();
-    let mut checked = 0;
-    for line in manifest.lines().skip(1) {
-        let fields: Vec<&str> = line.split('\t').collect();
-        let faces: usize = fields[4].parse().unwrap();
-        if faces > 40_000 {
-            continue; // the larger ones add time, not cases
-        }
-        let mesh = read_mesh(dir.join(fields[0])).unwrap();
-        let report = validate(&mesh);
-        if report.non_manifold_vertices == 0 {
-            continue;
-        }
-        let out = simplify(&mesh, &options(0.8)).unwrap();
-        assert_valid_output(fields[0], &mesh, &out);
-        assert_exact_round_trip(fields[0], &mesh, out.progressive.as_ref().unwrap());
-        checked += 1;
-    }
+    let checked = corpus_stays_valid_and_round_trips(&dir, 40_000, 0.8, |m| validate(m).non_manifold_vertices > 0);
     assert!(checked >= 10, "only {checked} non-manifold corpus meshes");
 }
 
 #[test]
 fn every_corpus_mesh_at_90_percent_stays_valid_and_round_trips() {
     // The whole corpus (organic scans, CAD and robot parts; with holes, non-manifold edges,
-    // bow-tie vertices, duplicate faces and faces wound the wrong way) with the default options:
-    // every invariant and the exact round trip. (A statue whose one boundary loop runs through
-    // faces wound both ways read as 108 loops before the count followed edges rather than their
-    // direction: this test failed on it.)
+    // bow-tie vertices, duplicate faces and faces wound the wrong way) with the default options.
+    // (A statue whose one boundary loop runs through faces wound both ways read as 108 loops
+    // before the count followed edges rather than their direction: this test failed on it.)
     let Some(dir) = meshlod_engine::datasets::require_shared_corpus("every_corpus_mesh_at_90_percent") else { return };
-    let manifest = std::fs::read_to_string(dir.join("MANIFEST.tsv")).unwrap();
-    let mut checked = 0;
-    for line in manifest.lines().skip(1) {
-        let fields: Vec<&str> = line.split('\t').collect();
-        let faces: usize = fields[4].parse().unwrap();
-        if faces > 150_000 {
-            continue; // the largest add time, not cases
-        }
-        let mesh = read_mesh(dir.join(fields[0])).unwrap();
-        let out = simplify(&mesh, &options(0.9)).unwrap();
-        assert_valid_output(fields[0], &mesh, &out);
-        assert_exact_round_trip(fields[0], &mesh, out.progressive.as_ref().unwrap());
-        checked += 1;
-    }
+    let checked = corpus_stays_valid_and_round_trips(&dir, 150_000, 0.9, |_| true);
     assert!(checked >= 80, "only {checked} corpus meshes");
 }
 
