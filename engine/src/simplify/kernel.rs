@@ -24,6 +24,11 @@ const BOUNDARY_WEIGHT: f64 = 10.0;
 /// CesiumMan, Fox and fuze at an unchanged position error; from 0.5 up Duck's and spot's position
 /// error grows (spot 1.3× meshoptimizer's at 1).
 const SEAM_WEIGHT: f64 = 0.3;
+/// Weight of the constraint planes along an anchor's spokes where the texture coordinates differ
+/// on their two sides (a sphere's pole, where each face has its own value). Chosen by
+/// measurement (docs/attributes-report.md): capsule's texture error falls with 0.3 and falls more
+/// with 1 and 3; from 30 Fox stops above its face count.
+const SPOKE_WEIGHT: f64 = 1.0;
 
 pub(crate) const NONE: u32 = u32::MAX;
 
@@ -321,13 +326,25 @@ impl<'o> State<'o> {
     /// chart keeps its outline on the surface (without them a seam loop on a flat stretch, an
     /// eye's chart on the Duck, shrinks to a triangle for almost nothing and its texture spreads
     /// over the faces around).
+    ///
+    /// Also along an anchor's spokes (edges to a vertex off every seam) whose two faces give the
+    /// anchor different texture coordinates: at a sphere's pole each face has its own, and a
+    /// collapse around the pole that merges two of those faces' wedges (cheap in position: the
+    /// faces there are small) stretches one value over both; the planes charge it what it moves
+    /// the spoke by.
     fn add_seam_planes(&mut self, mesh: &Mesh) {
         for (f, t) in mesh.triangles.iter().enumerate() {
             for k in 0..3 {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
-                if !(self.on_seam[a as usize] && self.on_seam[b as usize]) {
-                    continue;
-                }
+                let anchor = |v: u32| self.vertices[v as usize].kind == VertexKind::Anchored;
+                // The anchor's corner of a spoke (its index among f's corners), or None for an edge
+                // along a seam.
+                let spoke = match (self.on_seam[a as usize], self.on_seam[b as usize]) {
+                    (true, true) => None,
+                    (true, false) if anchor(a) => Some((a, k)),
+                    (false, true) if anchor(b) => Some((b, (k + 1) % 3)),
+                    _ => continue,
+                };
                 // The face across (a, b), and whether its corners at a and b carry other values.
                 let across = self.fans[a as usize].iter().find(|d| d.face != f as u32 && d.touches(b));
                 let Some(d) = across else { continue };
@@ -337,7 +354,15 @@ impl<'o> State<'o> {
                 if same {
                     continue;
                 }
-                self.add_edge_plane(mesh, f, a, b, SEAM_WEIGHT);
+                let weight = match (spoke, &mesh.corners.uvs) {
+                    (None, _) => SEAM_WEIGHT,
+                    (Some((v, corner)), Some(uvs)) if uvs[3 * f + corner] != uvs[self.source_at(g, v) as usize] => {
+                        SPOKE_WEIGHT
+                    }
+                    // A spoke across which only other values (normals: a hard edge) change.
+                    (Some(_), _) => continue,
+                };
+                self.add_edge_plane(mesh, f, a, b, weight);
             }
         }
     }
