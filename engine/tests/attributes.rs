@@ -652,9 +652,8 @@ fn attribute_quadrics_are_off_by_default_and_lower_the_texture_error_on_spot() {
 fn a_textured_poles_wedges_keep_their_columns() {
     // capsule.obj's poles have one texture coordinate per face (the middle of its column). The
     // collapses around a pole cost almost nothing in position (the faces there are small), and
-    // merging two faces' wedges stretches one value over both columns: before the constraint
-    // planes along the pole's spokes, its texture error to 10% was 0.91 texels mean (13 in the
-    // band nearest each pole); meshoptimizer's is 0.85 (docs/attributes-report.md).
+    // merging two faces' wedges stretches one value over both columns. Without the constraint
+    // planes along the pole's spokes this fails (docs/attributes-report.md, spoke planes).
     use meshlod_engine::simplify::{SimplifyOptions, simplify};
     let Some(dir) = meshlod_engine::datasets::require_shared_textured("a_textured_poles_wedges") else { return };
     let mesh = read_mesh(dir.join("trimesh__capsule/capsule.obj")).unwrap();

@@ -218,8 +218,8 @@ fn non_manifold_corpus_meshes_stay_valid_and_round_trip() {
 fn every_corpus_mesh_at_90_percent_stays_valid_and_round_trips() {
     // The whole corpus (organic scans, CAD and robot parts; with holes, non-manifold edges,
     // bow-tie vertices, duplicate faces and faces wound the wrong way) with the default options.
-    // (A statue whose one boundary loop runs through faces wound both ways read as 108 loops
-    // before the count followed edges rather than their direction: this test failed on it.)
+    // (A statue whose one boundary loop runs through faces wound both ways was counted as many
+    // loops before the count followed edges rather than their direction: this test failed on it.)
     let Some(dir) = meshlod_engine::datasets::require_shared_corpus("every_corpus_mesh_at_90_percent") else { return };
     let checked = corpus_stays_valid_and_round_trips(&dir, 150_000, 0.9, |_| true);
     assert!(checked >= 80, "only {checked} corpus meshes");
