@@ -175,8 +175,7 @@ fn a_boundary_loop_whose_faces_turn_over_along_it_is_one_loop_in_any_numbering()
     // A grid (one boundary loop) with a band of faces from one border to the opposite one wound
     // the other way: along the loop the faces' direction flips four times. It is still one loop,
     // and so is the same mesh numbered backwards. Walked only in the faces' direction the count
-    // was 22 here, and it moved with the numbering (a corpus statue read 108 loops, and 70 once
-    // renumbered, for its one loop of 322 edges).
+    // was 22 here, and it moved with the numbering.
     let n = 12;
     let grid = procedural::terrain(n, 1);
     let mut triangles = grid.triangles.clone();
