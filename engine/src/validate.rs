@@ -211,7 +211,8 @@ pub(crate) fn fan_count(mesh: &Mesh, topology: &Topology, v: u32) -> usize {
     fans as usize
 }
 
-/// Counts boundary loops: closed walks over the boundary edges (edges with one face).
+/// Counts boundary loops: closed walks over the boundary edges (edges with one face), and the
+/// open chains of them that end at non-manifold edges.
 ///
 /// The walk follows the edges whichever way their faces run, so a loop along which the
 /// orientation flips (a strip of faces turned over) is one loop, not one per start. At a vertex
@@ -258,20 +259,25 @@ fn count_boundary_loops(topology: &Topology) -> usize {
             continue;
         }
         loops += 1;
-        let (mut e, mut v) = (start, topology.edges[start as usize][1]);
-        loop {
-            used[e as usize] = true;
-            let here = at_vertex.get(v as usize);
-            let next = match here {
-                [x, y] => Some(if *x == e { *y } else { *x }),
-                _ => turn(e, v).or_else(|| here.iter().copied().find(|&x| !used[x as usize])),
-            };
-            match next.filter(|&n| !used[n as usize]) {
-                Some(n) => {
-                    let [a, b] = topology.edges[n as usize];
-                    (e, v) = (n, if a == v { b } else { a });
+        // Out from both ends of the first edge: a closed loop comes back to it (and the second
+        // walk stops at once); a chain that ends at a non-manifold edge is one piece, wherever
+        // in it the walk starts.
+        for end in topology.edges[start as usize] {
+            let (mut e, mut v) = (start, end);
+            loop {
+                used[e as usize] = true;
+                let here = at_vertex.get(v as usize);
+                let next = match here {
+                    [x, y] => Some(if *x == e { *y } else { *x }),
+                    _ => turn(e, v).or_else(|| here.iter().copied().find(|&x| !used[x as usize])),
+                };
+                match next.filter(|&n| !used[n as usize]) {
+                    Some(n) => {
+                        let [a, b] = topology.edges[n as usize];
+                        (e, v) = (n, if a == v { b } else { a });
+                    }
+                    None => break,
                 }
-                None => break,
             }
         }
     }

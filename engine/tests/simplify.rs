@@ -15,6 +15,8 @@ use meshlod_engine::simplify::{
 use meshlod_engine::validate::validate;
 use meshlod_engine::{Mesh, MeshError, procedural};
 
+mod common;
+
 fn options(ratio: f64) -> SimplifyOptions {
     SimplifyOptions { target_ratio: Some(ratio), record_progressive: true, ..Default::default() }
 }
@@ -88,7 +90,11 @@ fn assert_valid_output(name: &str, input: &Mesh, out: &Simplified) {
     }
     // Where loops meet at non-manifold vertices "loops" are ambiguous; the pieces of the
     // boundary-edge graph are not (a closed hole's three vertices were on no other loop).
-    assert_eq!(boundary_pieces(output) + holes, boundary_pieces(input), "{name}: boundary pieces changed");
+    assert_eq!(
+        common::boundary_graph(output).0 + holes,
+        common::boundary_graph(input).0,
+        "{name}: boundary pieces changed"
+    );
     assert_eq!(after.components, before.components, "{name}: a component vanished or split");
     // Folded pairs: two faces sharing an edge whose normals point (almost) opposite ways. Scans
     // may already have some; simplification must not add any.
@@ -110,25 +116,6 @@ fn folded_pairs(mesh: &Mesh) -> usize {
     }
     let normal = |f: usize| mesh.face_area_vector(f).normalize_or_zero();
     edge_faces.values().filter(|faces| faces.len() == 2 && normal(faces[0]).dot(normal(faces[1])) < -0.999).count()
-}
-
-/// Connected components of the graph of boundary edges.
-fn boundary_pieces(mesh: &Mesh) -> usize {
-    let topology = meshlod_engine::topology::Topology::new(mesh);
-    let mut sets = meshlod_engine::topology::UnionFind::new(mesh.vertex_count());
-    let mut on_boundary = vec![false; mesh.vertex_count()];
-    for (e, &[a, b]) in topology.edges.iter().enumerate() {
-        if topology.edge_faces.get(e).len() == 1 {
-            sets.union(a, b);
-            on_boundary[a as usize] = true;
-            on_boundary[b as usize] = true;
-        }
-    }
-    let mut roots: Vec<u32> =
-        (0..mesh.vertex_count() as u32).filter(|&v| on_boundary[v as usize]).map(|v| sets.find(v)).collect();
-    roots.sort_unstable();
-    roots.dedup();
-    roots.len()
 }
 
 /// A mesh's faces as sorted corner positions, sorted: equal for the same faces whatever the

@@ -4,6 +4,8 @@ use meshlod_engine::io::read_mesh;
 use meshlod_engine::validate::{clean, validate};
 use meshlod_engine::{Mesh, MeshError, procedural};
 
+mod common;
+
 /// Two triangles sharing only vertex 0 (a bowtie), drawn:
 ///
 /// ```text
@@ -207,4 +209,27 @@ fn a_boundary_loop_whose_faces_turn_over_along_it_is_one_loop_in_any_numbering()
     let mut both = triangles.clone();
     both.extend(triangles.iter().map(|t| t.map(|v| v + offset)));
     assert_eq!(validate(&Mesh::new(positions, both).unwrap()).boundary_loops, 2);
+}
+
+#[test]
+fn boundary_loops_are_the_boundary_graphs_pieces_where_no_vertex_pinches_them() {
+    // Where every vertex has at most two boundary edges the boundary is a set of cycles and of
+    // chains ending at non-manifold edges (beetle has six such ends): each is one loop, whichever
+    // way its faces run and wherever the walk starts.
+    let Some(meshes) = meshlod_engine::datasets::require_shared_meshes("boundary_loops_are_pieces") else { return };
+    let mut files: Vec<std::path::PathBuf> =
+        meshlod_engine::datasets::SHARED_MESHES.iter().map(|n| meshes.join(format!("{n}.obj"))).collect();
+    if let Some(corpus) = meshlod_engine::datasets::require_shared_corpus("boundary_loops_are_pieces") {
+        files.extend(meshlod_engine::datasets::corpus_meshes(&corpus, 150_000).into_iter().map(|(_, path)| path));
+    }
+    let mut checked = 0;
+    for path in files {
+        let mesh = read_mesh(&path).unwrap();
+        let (pieces, pinched) = common::boundary_graph(&mesh);
+        if !pinched {
+            assert_eq!(validate(&mesh).boundary_loops, pieces, "{}", path.display());
+            checked += 1;
+        }
+    }
+    assert!(checked >= 50, "only {checked} meshes without pinched boundaries");
 }

@@ -1,4 +1,4 @@
-//! Helpers shared by the reader, attribute and `.pm` tests (each test crate uses some of them).
+//! Helpers shared by the test crates (each uses some of them).
 #![allow(dead_code)]
 
 use std::path::Path;
@@ -117,4 +117,24 @@ pub fn assert_compact_round_trip(name: &str, pm: &meshlod_engine::pm::Progressiv
     }
     let records = bytes.len() - meshlod_engine::pm_format::materials_section_len(pm);
     (records as f64) / (pm.levels().max(1) as f64)
+}
+
+/// The pieces of the graph of boundary edges (edges with one face), and whether some vertex has
+/// more than two boundary edges (pinches the boundary).
+pub fn boundary_graph(mesh: &Mesh) -> (usize, bool) {
+    let topology = meshlod_engine::topology::Topology::new(mesh);
+    let mut sets = meshlod_engine::topology::UnionFind::new(mesh.vertex_count());
+    let mut degree = vec![0u32; mesh.vertex_count()];
+    for (e, &[a, b]) in topology.edges.iter().enumerate() {
+        if topology.edge_faces.get(e).len() == 1 {
+            sets.union(a, b);
+            degree[a as usize] += 1;
+            degree[b as usize] += 1;
+        }
+    }
+    let mut roots: Vec<u32> =
+        (0..mesh.vertex_count() as u32).filter(|&v| degree[v as usize] > 0).map(|v| sets.find(v)).collect();
+    roots.sort_unstable();
+    roots.dedup();
+    (roots.len(), degree.iter().any(|&d| d > 2))
 }
