@@ -32,7 +32,8 @@ pub struct MeshReport {
     pub unreferenced_vertices: usize,
     /// Edges shared by one face.
     pub boundary_edges: usize,
-    /// Closed chains of boundary edges (holes and outer borders).
+    /// Closed chains of boundary edges (holes and outer borders), and open chains of them that end
+    /// at non-manifold edges, each counted once.
     pub boundary_loops: usize,
     /// Edges shared by more than two faces.
     pub non_manifold_edges: usize,
