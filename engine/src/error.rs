@@ -33,8 +33,10 @@ pub enum MeshError {
         vertex_count: usize,
     },
     /// The mesh exceeds a configured size limit.
-    #[error("mesh too large: {count} {what} exceeds the limit of {limit}")]
+    #[error("{}mesh too large: {count} {what} exceeds the limit of {limit}", in_file(file))]
     TooLarge {
+        /// The file that holds (or claims) it, when it was read from one.
+        file: Option<PathBuf>,
         /// "vertices" or "faces".
         what: &'static str,
         /// The count found or claimed.
@@ -79,6 +81,11 @@ pub enum MeshError {
     /// The operation was cancelled by its caller.
     #[error("operation cancelled")]
     Cancelled,
+}
+
+/// "PATH: " for an error about a file, nothing otherwise.
+fn in_file(file: &Option<PathBuf>) -> String {
+    file.as_ref().map(|path| format!("{}: ", path.display())).unwrap_or_default()
 }
 
 impl MeshError {

@@ -48,7 +48,10 @@ fn obj_refusals_name_the_line() {
 fn obj_limits_are_enforced() {
     let limits = ReadLimits { max_vertices: 3, max_faces: 1, cancel: None };
     let r = read_mesh_bytes(SQUARE_OBJ.as_bytes(), Some(MeshFormat::Obj), Path::new("t.obj"), &limits);
-    assert!(matches!(r, Err(MeshError::TooLarge { what: "vertices", count: 4, limit: 3 })), "{r:?}");
+    assert!(matches!(r, Err(MeshError::TooLarge { what: "vertices", count: 4, limit: 3, .. })), "{r:?}");
+    // The message names the file, as every other read error does.
+    let message = r.unwrap_err().to_string();
+    assert_eq!(message, "t.obj: mesh too large: 4 vertices exceeds the limit of 3");
     let limits = ReadLimits { max_vertices: 10, max_faces: 1, cancel: None };
     let r = read_mesh_bytes(SQUARE_OBJ.as_bytes(), Some(MeshFormat::Obj), Path::new("t.obj"), &limits);
     assert!(matches!(r, Err(MeshError::TooLarge { what: "faces", .. })), "{r:?}");

@@ -211,9 +211,11 @@ pub fn refine(
     options.max_faces = Some(max_faces);
     // The output's size is known before each subdivision round is built: refused before the work.
     let result = engine_refine(mesh, &options).map_err(|e| match e {
-        MeshError::TooLarge { what, count, limit } if what.starts_with("faces (refine") => Status::invalid_argument(
-            format!("rounds: the result would have {count} faces or more, over the limit of {limit}"),
-        ),
+        MeshError::TooLarge { what, count, limit, .. } if what.starts_with("faces (refine") => {
+            Status::invalid_argument(format!(
+                "rounds: the result would have {count} faces or more, over the limit of {limit}"
+            ))
+        }
         other => engine_status(other, ""),
     })?;
     let s = &result.stats;

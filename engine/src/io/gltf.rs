@@ -200,8 +200,8 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
             corners += primitive.indices().map_or(positions.count(), |a| a.count()) as u64;
         }
     }
-    limits.check_vertices(vertices)?;
-    limits.check_faces(corners / 3)?;
+    limits.check_vertices(vertices, path)?;
+    limits.check_faces(corners / 3, path)?;
 
     let mut parts = Vec::new();
     for (mesh, world, _) in &instances {

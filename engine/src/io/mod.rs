@@ -134,18 +134,26 @@ impl ReadLimits {
         }
     }
 
-    pub(crate) fn check_vertices(&self, count: u64) -> Result<(), MeshError> {
+    /// [`MeshError::TooLarge`], naming `path`, when `count` vertices are over the limit.
+    pub(crate) fn check_vertices(&self, count: u64, path: &Path) -> Result<(), MeshError> {
         self.check_cancel()?;
         if count > self.max_vertices {
-            return Err(MeshError::TooLarge { what: "vertices", count, limit: self.max_vertices });
+            let file = Some(path.to_path_buf());
+            return Err(MeshError::TooLarge { file, what: "vertices", count, limit: self.max_vertices });
         }
         Ok(())
     }
 
-    pub(crate) fn check_faces(&self, count: u64) -> Result<(), MeshError> {
+    /// [`MeshError::TooLarge`], naming `path`, when `count` faces are over the limit.
+    pub(crate) fn check_faces(&self, count: u64, path: &Path) -> Result<(), MeshError> {
         self.check_cancel()?;
         if count > self.max_faces {
-            return Err(MeshError::TooLarge { what: "faces", count, limit: self.max_faces });
+            return Err(MeshError::TooLarge {
+                file: Some(path.to_path_buf()),
+                what: "faces",
+                count,
+                limit: self.max_faces,
+            });
         }
         Ok(())
     }

@@ -110,7 +110,7 @@ pub fn read_obj(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadL
         };
         match keyword {
             "v" => {
-                limits.check_vertices(positions.len() as u64 + 1)?;
+                limits.check_vertices(positions.len() as u64 + 1, path)?;
                 positions.push(parse_floats::<3>(tokens, path, line, "vertex")?);
             }
             "vt" => uvs.push(parse_floats::<2>(tokens, path, line, "texture coordinate")?),
@@ -149,7 +149,7 @@ pub fn read_obj(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadL
                     ));
                 }
                 // Checked before triangulating: n corners always make n − 2 triangles.
-                limits.check_faces((triangles.len() + polygon.len() - 2) as u64)?;
+                limits.check_faces((triangles.len() + polygon.len() - 2) as u64, path)?;
                 local_triangles.clear();
                 if polygon.len() == 3 {
                     local_triangles.push([0, 1, 2]);

@@ -63,8 +63,8 @@ pub fn read_off(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
         })
     };
     let (vertex_count, face_count) = (count(0, "vertex")?, count(1, "face")?);
-    limits.check_vertices(vertex_count)?;
-    limits.check_faces(face_count)?;
+    limits.check_vertices(vertex_count, path)?;
+    limits.check_faces(face_count, path)?;
 
     // Reserve no more than the text could hold: a vertex line has at least 6 bytes.
     let mut positions: Vec<[f32; 3]> = Vec::with_capacity((vertex_count as usize).min(bytes.len() / 6));
@@ -123,7 +123,7 @@ pub fn read_off(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
             ));
         }
         // n corners make n − 2 triangles: checked before any work on them.
-        limits.check_faces((triangles.len() + corners - 2) as u64)?;
+        limits.check_faces((triangles.len() + corners - 2) as u64, path)?;
         indices.clear();
         for k in 0..corners {
             let token = tokens.next().ok_or_else(|| {

@@ -268,8 +268,8 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
         };
         needed = needed.saturating_add(e.count.saturating_mul(per_element));
         match e.name.as_str() {
-            "vertex" => limits.check_vertices(e.count)?,
-            "face" => limits.check_faces(e.count)?,
+            "vertex" => limits.check_vertices(e.count, path)?,
+            "face" => limits.check_faces(e.count, path)?,
             _ => {}
         }
     }
@@ -453,7 +453,7 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
             ));
         }
         // Checked before triangulating: n corners always make n − 2 triangles.
-        limits.check_faces((triangles.len() + indices.len().saturating_sub(2)) as u64)?;
+        limits.check_faces((triangles.len() + indices.len().saturating_sub(2)) as u64, path)?;
         triangulate_face(indices.iter().map(|&v| positions[v as usize]), &mut points, &mut local);
         triangles.extend(local.iter().map(|t| [indices[t[0]] as u32, indices[t[1]] as u32, indices[t[2]] as u32]));
     }

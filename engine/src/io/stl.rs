@@ -57,21 +57,25 @@ impl Welder {
         }
     }
 
-    fn vertex(&mut self, p: [f32; 3], limits: &ReadLimits) -> Result<u32, MeshError> {
+    fn vertex(&mut self, p: [f32; 3], limits: &ReadLimits, path: &Path) -> Result<u32, MeshError> {
         // −0 and +0 are the same point.
         let p = p.map(|c| c + 0.0);
         let next = self.positions.len() as u32;
         let v = *self.index.entry(p.map(f32::to_bits)).or_insert(next);
         if v == next {
-            limits.check_vertices(next as u64 + 1)?;
+            limits.check_vertices(next as u64 + 1, path)?;
             self.positions.push(p);
         }
         Ok(v)
     }
 
-    fn facet(&mut self, corners: [[f32; 3]; 3], limits: &ReadLimits) -> Result<(), MeshError> {
-        limits.check_faces(self.triangles.len() as u64 + 1)?;
-        let t = [self.vertex(corners[0], limits)?, self.vertex(corners[1], limits)?, self.vertex(corners[2], limits)?];
+    fn facet(&mut self, corners: [[f32; 3]; 3], limits: &ReadLimits, path: &Path) -> Result<(), MeshError> {
+        limits.check_faces(self.triangles.len() as u64 + 1, path)?;
+        let t = [
+            self.vertex(corners[0], limits, path)?,
+            self.vertex(corners[1], limits, path)?,
+            self.vertex(corners[2], limits, path)?,
+        ];
         self.triangles.push(t);
         Ok(())
     }
@@ -114,7 +118,7 @@ pub fn read_stl(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
 
 fn read_binary(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, MeshError> {
     let count = binary_count(bytes).expect("checked") as usize;
-    limits.check_faces(count as u64)?;
+    limits.check_faces(count as u64, path)?;
     let mut welder = Welder::new(count);
     for (facet, record) in bytes[HEADER + 4..].chunks_exact(FACET).enumerate() {
         let float = |k: usize| {
@@ -122,7 +126,7 @@ fn read_binary(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, M
             f32::from_le_bytes([record[at], record[at + 1], record[at + 2], record[at + 3]])
         };
         let corner = |c: usize| finite([float(3 * c), float(3 * c + 1), float(3 * c + 2)], path, facet);
-        welder.facet([corner(0)?, corner(1)?, corner(2)?], limits)?;
+        welder.facet([corner(0)?, corner(1)?, corner(2)?], limits, path)?;
     }
     welder.finish()
 }
@@ -184,7 +188,7 @@ fn read_ascii(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, Me
                         format!("a facet with {} vertices; STL needs 3", corners.len()),
                     ));
                 }
-                welder.facet([corners[0], corners[1], corners[2]], limits)?;
+                welder.facet([corners[0], corners[1], corners[2]], limits, path)?;
                 in_loop = false;
             }
             "endfacet" => facets_open = facets_open.saturating_sub(1),
@@ -277,7 +281,7 @@ mod tests {
     fn limits_apply_before_reading_the_facets() {
         let limits = ReadLimits { max_faces: 3, ..ReadLimits::default() };
         let err = read_stl(&binary(&TETRA), Path::new("t.stl"), &limits).unwrap_err();
-        assert!(matches!(err, MeshError::TooLarge { what: "faces", count: 4, limit: 3 }), "{err}");
+        assert!(matches!(err, MeshError::TooLarge { what: "faces", count: 4, limit: 3, .. }), "{err}");
         let limits = ReadLimits { max_vertices: 3, ..ReadLimits::default() };
         let err = read_stl(&binary(&TETRA), Path::new("t.stl"), &limits).unwrap_err();
         assert!(matches!(err, MeshError::TooLarge { what: "vertices", .. }), "{err}");

@@ -141,6 +141,7 @@ fn subdivide_rounds(
         let faces = current.face_count() + added;
         if faces > max_faces {
             return Err(MeshError::TooLarge {
+                file: None,
                 what: "faces (refine output)",
                 count: faces as u64,
                 limit: max_faces as u64,
@@ -268,7 +269,12 @@ pub fn refine(mesh: &Mesh, options: &RefineOptions) -> Result<Refined, MeshError
     if let Some(t) = options.target_faces
         && t > max_faces
     {
-        return Err(MeshError::TooLarge { what: "faces (refine target)", count: t as u64, limit: max_faces as u64 });
+        return Err(MeshError::TooLarge {
+            file: None,
+            what: "faces (refine target)",
+            count: t as u64,
+            limit: max_faces as u64,
+        });
     }
     let energies = EnergyOperator::new(&prepared);
     let mean = energies.mean_face_energy;
