@@ -138,8 +138,12 @@ impl ReadLimits {
     pub(crate) fn check_vertices(&self, count: u64, path: &Path) -> Result<(), MeshError> {
         self.check_cancel()?;
         if count > self.max_vertices {
-            let file = Some(path.to_path_buf());
-            return Err(MeshError::TooLarge { file, what: "vertices", count, limit: self.max_vertices });
+            return Err(MeshError::TooLarge {
+                file: Some(path.to_path_buf()),
+                what: "vertices",
+                count,
+                limit: self.max_vertices,
+            });
         }
         Ok(())
     }
