@@ -310,12 +310,14 @@ fn triangular_holes_close_and_their_splits_open_them_again_in_every_form() {
 
 #[test]
 fn beetle_reaches_its_face_target_at_90_percent() {
-    // Its 33 boundary loops shrink to triangles that only closing them takes further (45 frozen
+    // Its boundary loops shrink to triangles that only closing them takes further (45 frozen
     // vertices on its non-manifold edges hold the rest).
     let Some(mesh) = shared("beetle") else { return };
     let out = simplify(&mesh, &options(0.9)).unwrap();
     assert_eq!(out.stats.stop_reason, StopReason::TargetReached, "{:?}", out.stats);
-    assert_eq!(out.stats.faces_out, out.stats.target_faces);
+    // Reached: at the target, or one below it where the last collapse took two faces.
+    let (faces, target) = (out.stats.faces_out, out.stats.target_faces);
+    assert!(faces <= target && faces + 1 >= target, "{faces} faces for a target of {target}");
     assert!(out.stats.holes_closed > 0);
     assert_valid_output("beetle", &mesh, &out);
     assert_exact_round_trip("beetle", &mesh, out.progressive.as_ref().unwrap());

@@ -4,6 +4,7 @@
 
 use glam::DVec3;
 
+use super::classify::VertexKind;
 use super::kernel::State;
 
 /// The share of the input's faces a run removes before the fan-distance term is measured: the
@@ -25,6 +26,12 @@ impl State<'_> {
     /// - current surface → result: per endpoint v, the distance from its position to the nearest
     ///   of the planes of its moved faces, `min |n_new·(v − p)|` (v's departure from the new fan,
     ///   where the fan is flat enough for a plane to stand for it).
+    ///
+    /// - along a border, for a collapse of two border vertices: how far each endpoint is from the
+    ///   border's new line (its neighbours across the border, c and d, joined through p), its
+    ///   square weighed [`BORDER_WEIGHT`] times: the faces alone do not see a border cut across a
+    ///   bend (a move within their planes), which lays faces over the hole beside it (the loops
+    ///   round beetle's eyes, cut to a few chords).
     ///
     /// Only the moved faces are read, all of which [`State::is_legal`] reads next anyway. Zero for
     /// a collapse that leaves the surface where it was (a flat neighbourhood, a move along a
@@ -57,8 +64,40 @@ impl State<'_> {
                 worst = worst.max(nearest);
             }
         }
+        let border = |v: u32| self.vertices[v as usize].kind == VertexKind::Boundary;
+        if border(a)
+            && border(b)
+            && let (Some(c), Some(d)) = (self.across_border(a, b), self.across_border(b, a))
+        {
+            let (pc, pd) = (self.point(c), self.point(d));
+            for q in [self.point(a), self.point(b)] {
+                let off_line = segment_distance2(q, pc, p).min(segment_distance2(q, p, pd));
+                worst = worst.max(BORDER_WEIGHT * off_line);
+            }
+        }
         worst
     }
+
+    /// The neighbour of border vertex `v` across its border edge other than the one to `other`:
+    /// the one neighbour that only one face of `v`'s fan has.
+    fn across_border(&self, v: u32, other: u32) -> Option<u32> {
+        let fan = &self.fans[v as usize];
+        let faces_with = |u: u32| fan.iter().filter(|c| c.touches(u)).count();
+        fan.iter().flat_map(|c| [c.next, c.prev]).find(|&u| u != other && faces_with(u) == 1)
+    }
+}
+
+/// How many times the squared distance a collapse moves a border off its line counts beside the
+/// faces' distances in the fan-distance term (a border's move counts double). Measured over the
+/// shared meshes and the corpus beside other weights (docs/benchmarks.md).
+const BORDER_WEIGHT: f64 = 4.0;
+
+/// The squared distance from `q` to the segment `a`–`b`.
+fn segment_distance2(q: DVec3, a: DVec3, b: DVec3) -> f64 {
+    let ab = b - a;
+    let length2 = ab.length_squared();
+    let t = if length2 > 0.0 { ((q - a).dot(ab) / length2).clamp(0.0, 1.0) } else { 0.0 };
+    (a + ab * t - q).length_squared()
 }
 
 #[cfg(test)]
@@ -89,5 +128,32 @@ mod tests {
         // Small lifts: quadratic in h, as the quadric error is.
         let ratio = lifted(2e-3) / lifted(1e-3);
         assert!((3.9..4.1).contains(&ratio), "{ratio}");
+    }
+
+    /// Collapses within a flat fan move no face off its plane; along a border, the term charges
+    /// how far the border leaves its line: nothing along a straight side, and across one of the
+    /// wheel's 60° bends the chord's distance from the removed corner (radius 2: 1).
+    #[test]
+    fn a_border_cut_across_a_bend_costs_its_chords_distance_and_a_straight_one_nothing() {
+        let options = SimplifyOptions::default();
+        let mesh = wheel();
+        let (state, _) = State::new(&mesh, &options);
+        // Outer vertices 7..=12 are the border, 8 between 7 and 9.
+        let d2 = state.moved_fan_distance2(7, 8, state.point(7));
+        assert!((d2 - super::BORDER_WEIGHT * 1.0).abs() < 1e-5, "{d2}"); // (f32 positions)
+        // A flat 4 × 3 grid: its bottom side 0, 1, 2, 3 is straight.
+        let positions = (0..3).flat_map(|j| (0..4).map(move |i| [i as f32, j as f32, 0.0])).collect();
+        let mut triangles = Vec::new();
+        for j in 0..2u32 {
+            for i in 0..3u32 {
+                let v = j * 4 + i;
+                triangles.extend([[v, v + 1, v + 5], [v, v + 5, v + 4]]);
+            }
+        }
+        let grid = crate::Mesh::new(positions, triangles).unwrap();
+        let (state, _) = State::new(&grid, &options);
+        assert_eq!(state.moved_fan_distance2(1, 2, state.point(1)), 0.0);
+        // The same side collapsed onto a point off it: charged.
+        assert!(state.moved_fan_distance2(1, 2, DVec3::new(1.5, 0.5, 0.0)) > 0.0);
     }
 }

@@ -48,7 +48,8 @@
 //! each candidate `distance_term · A · d²` on top of its quadric error (then the QFVP normal
 //! factor), with A the area behind the merged quadric and d the farthest the collapse moves the
 //! surface as its moved faces alone show it (`fan_term`): from each moved face's new centroid to
-//! the plane it had, and from each endpoint to the planes of its moved faces. It reads only what
+//! the plane it had, and from each endpoint to the planes of its moved faces; for a collapse of two
+//! border vertices, also how far each endpoint is from the border's new line. It reads only what
 //! the legality checks read next, and is queued lazily like the guard below. It is measured once
 //! half the input's faces are gone (`fan_term::FAN_TERM_FROM`): before that, collapses move the
 //! surface so little that the term bought no accuracy for its time; with it the default
