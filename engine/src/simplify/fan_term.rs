@@ -25,8 +25,7 @@ impl State<'_> {
     ///   of the face it was, `|n_old·(p − v)| / 3`;
     /// - current surface → result: per endpoint v, the distance from its position to the nearest
     ///   of the planes of its moved faces, `min |n_new·(v − p)|` (v's departure from the new fan,
-    ///   where the fan is flat enough for a plane to stand for it).
-    ///
+    ///   where the fan is flat enough for a plane to stand for it);
     /// - along a border, for a collapse of two border vertices: how far each endpoint is from the
     ///   border's new line (its neighbours across the border, c and d, joined through p), its
     ///   square weighed [`BORDER_WEIGHT`] times: the faces alone do not see a border cut across a
