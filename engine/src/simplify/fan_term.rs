@@ -78,11 +78,10 @@ impl State<'_> {
     }
 
     /// The neighbour of border vertex `v` across its border edge other than the one to `other`:
-    /// the one neighbour that only one face of `v`'s fan has.
+    /// the one neighbour whose edge to `v` has a single face.
     fn across_border(&self, v: u32, other: u32) -> Option<u32> {
         let fan = &self.fans[v as usize];
-        let faces_with = |u: u32| fan.iter().filter(|c| c.touches(u)).count();
-        fan.iter().flat_map(|c| [c.next, c.prev]).find(|&u| u != other && faces_with(u) == 1)
+        fan.iter().flat_map(|c| [c.next, c.prev]).find(|&u| u != other && self.edge_corners(v, u).1 == 1)
     }
 }
 
