@@ -307,8 +307,9 @@ pub struct SimplifyArgs {
     #[arg(long, value_name = "WEIGHT", num_args = 0..=1, default_missing_value = "1")]
     pub guard: Option<f64>,
     /// Weight of the fan-distance term (default 1; 0 leaves the paper's QFVP/QEM cost as it is):
-    /// each collapse once half the input's faces are gone also pays for how far it moves the
-    /// faces it changes, measured on those faces alone. Ignored with Melax, with --guard and on
+    /// with it each collapse ranks by its quadric error per unit of area and, once 70% of the
+    /// input's faces are gone, also pays for how far it moves the faces it changes, measured on
+    /// those faces alone. Ignored with Melax, with --guard and on
     /// meshes with texture coordinates (docs/meshlab-comparison.md, docs/attributes-report.md).
     #[arg(long, value_name = "WEIGHT")]
     pub distance_term: Option<f64>,

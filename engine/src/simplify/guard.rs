@@ -152,7 +152,7 @@ impl State<'_> {
             Some(guard) => (self.options.guard, self.guard_distance2(guard, a, b, choice.position)),
             None => (self.fan_term, self.moved_fan_distance2(a, b, choice.position)),
         };
-        Some((order_key((choice.error + weight * area * d2) * factor, choice.error, length2), choice))
+        Some((order_key((self.ranked_cost(choice.error, area) + weight * d2) * factor, choice.error, length2), choice))
     }
 
     /// The squared distance the guard charges for collapsing {a, b} to `p`: the larger of the

@@ -68,6 +68,10 @@ pub(crate) struct State<'o> {
     /// Weight of the fan-distance term (`fan_term`): the options' where it applies (a quadric
     /// cost, the distance guard off, no texture coordinates), else 0.
     pub(super) fan_term: f64,
+    /// Whether the queue ranks quadric costs per unit of the area behind them
+    /// ([`State::ranked_cost`]): with a distance term (the fan-distance term or the guard's), not
+    /// with the paper's cost alone.
+    pub(super) per_area: bool,
     /// Per-corner attributes carried through the collapses ([`State::carry_attributes`]): the
     /// input's values, and for each current corner (3 per face) the input corner whose values it
     /// has. Empty when the input has none (the collapse then pays nothing for them).
@@ -250,6 +254,7 @@ impl<'o> State<'o> {
                 _ if options.guard > 0.0 || mesh.corners.uvs.is_some() => 0.0,
                 _ => options.distance_term,
             },
+            per_area: false,
             attributes: CornerAttributes::default(),
             value_id: Vec::new(),
             corner_source: Vec::new(),
@@ -261,6 +266,7 @@ impl<'o> State<'o> {
         if options.guard > 0.0 {
             state.guard = DistanceGuard::new(mesh, &state.fans);
         }
+        state.per_area = state.has_distance_term() && options.metric != Metric::Melax;
         // The quadrics take, besides their faces' planes, a plane through each border edge and
         // perpendicular to its face: a border keeps its line.
         for &(a, b, f) in &boundary_edges {

@@ -138,18 +138,20 @@ pub struct SimplifyOptions {
     /// Build the progressive mesh (base mesh + vertex splits).
     pub record_progressive: bool,
     /// Weight of the distance guard, ≥ 0 (0, the default, turns it off; 1 is the documented
-    /// setting). With it, each QEM/QFVP collapse cost also pays `guard · A · d²` before the normal
-    /// factor: A the surface area behind the merged quadric, d a measured distance between the
-    /// collapse's new fan and the input surface, both ways (the module doc's "distance guard"). It
+    /// setting). With it, each QEM/QFVP collapse is ranked by its quadric error over A, the surface
+    /// area behind the merged quadric, plus `guard · d²`, before the normal factor: d a measured
+    /// distance between the collapse's new fan and the input surface, both ways (the module doc's
+    /// "distance guard"). It
     /// covers quadric error's blind spot, a thin tip shortened along its own faces, at a price in
     /// time and memory given in docs/benchmarks.md; not with Melax.
     pub guard: f64,
     /// Weight of the fan-distance term, ≥ 0 (default [`DEFAULT_DISTANCE_TERM`]; 0 leaves the
-    /// paper's cost as it is). Each QEM/QFVP collapse cost also pays `distance_term · A · d²`
-    /// before the normal factor, like the guard's term but with d measured on the fans the
-    /// collapse changes only: from each new face's centroid to the plane of the face it was, and
-    /// from each endpoint to the new faces that were its own (the module doc's "fan-distance
-    /// term"), once half the input's faces are gone (the collapses before pay the paper's cost
+    /// paper's cost as it is). Each QEM/QFVP collapse is ranked by its quadric error over A, the
+    /// surface area behind the merged quadric, plus `distance_term · d²`, before the normal
+    /// factor, like the guard's term but with d measured on the fans the collapse changes only:
+    /// from each new face's centroid to the plane of the face it was, and from each endpoint to
+    /// the new faces that were its own (the module doc's "fan-distance term"), once 70% of the
+    /// input's faces are gone (the collapses before are ranked by their quadric error over A
     /// alone). Its price in time is in docs/benchmarks.md; ignored with Melax, while the guard is
     /// on (the guard measures against the input instead) and on meshes with texture coordinates
     /// (measured worse there, docs/attributes-report.md).

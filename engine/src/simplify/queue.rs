@@ -95,7 +95,8 @@ impl State<'_> {
             let near = (points[i] - (pv + pu) * 0.5).length_squared() <= length2;
             out[i] = if usual[i] && solved[i] && near {
                 let (a, b) = (v.min(us[i]), v.max(us[i]));
-                let key = order_key(errors[i] * self.normal_factor(vv, vu), errors[i], length2);
+                let cost = self.ranked_cost(errors[i], vv.quadric.weight + vu.quadric.weight);
+                let key = order_key(cost * self.normal_factor(vv, vu), errors[i], length2);
                 Some(QueueEntry::new(key, a, b, self.stamp(a, b)))
             } else {
                 self.entry(v, us[i])
@@ -113,8 +114,10 @@ impl State<'_> {
     pub(super) fn entry(&self, a: u32, b: u32) -> Option<QueueEntry> {
         let (a, b) = (a.min(b), a.max(b));
         let choice = self.choose(a, b)?;
-        let length2 = (self.point(a) - self.point(b)).length_squared();
-        Some(QueueEntry::new(order_key(choice.cost, choice.error, length2), a, b, self.stamp(a, b)))
+        let (va, vb) = (&self.vertices[a as usize], &self.vertices[b as usize]);
+        let length2 = (to_f64(va.position) - to_f64(vb.position)).length_squared();
+        let cost = self.ranked_cost(choice.cost, va.quadric.weight + vb.quadric.weight);
+        Some(QueueEntry::new(order_key(cost, choice.error, length2), a, b, self.stamp(a, b)))
     }
 
     /// Whether neither endpoint of `entry` changed since it was queued.
@@ -135,6 +138,32 @@ mod tests {
     use super::super::kernel::State;
     use super::super::{Placement, SimplifyOptions};
     use crate::procedural;
+
+    /// With a distance term (the default) an edge's key is its key under the paper's cost (the term
+    /// off) over the area behind the merged quadric: a mean squared distance, which the term's own
+    /// squared distance adds to; the collapse chosen is the same.
+    #[test]
+    fn with_a_distance_term_keys_are_per_unit_area() {
+        let mesh = procedural::bumpy_blob(12, 20, 4);
+        let defaults = SimplifyOptions::default();
+        let paper = SimplifyOptions { distance_term: 0.0, ..defaults.clone() };
+        let (per_area, _) = State::new(&mesh, &defaults);
+        let (summed, edges) = State::new(&mesh, &paper);
+        let cost = |entry: Option<crate::queue::QueueEntry>| {
+            f32::from_bits((entry.expect("ranked").rank() >> 32) as u32 & 0x7fff_ffff)
+        };
+        let mut ranked = 0;
+        for [a, b] in edges {
+            let area = summed.vertices[a as usize].quadric.weight + summed.vertices[b as usize].quadric.weight;
+            let (key, paper_key) = (cost(per_area.entry(a, b)), cost(summed.entry(a, b)));
+            assert!(area > 0.0 && paper_key > 0.0, "edge {a}-{b}: a curved blob has no flat collapse");
+            let expected = (paper_key as f64 / area) as f32;
+            assert!((key - expected).abs() <= 1e-6 * expected, "edge {a}-{b}: {key} for {expected}");
+            assert_eq!(per_area.evaluate(a, b).map(|c| c.position), summed.evaluate(a, b).map(|c| c.position));
+            ranked += 1;
+        }
+        assert!(ranked > 500, "{ranked} edges");
+    }
 
     /// Every pair of edges from one vertex, ranked side by side, gets the keys each gets alone: on
     /// a smooth blob, and on the same blob whose upper and lower halves carry different normals
