@@ -190,9 +190,11 @@ fn measure_once(mesh: &Mesh, options: &SimplifyOptions) -> f64 {
 /// w = 0, its time, and its spread on one-ulp copies of cow and bunny.
 fn guard_tables(meshes: &[(&str, Mesh)]) {
     println!("## Table 1b — with a distance term: the fan-distance term (the default) and the distance guard\n");
-    println!("The tables above use the paper's cost. `distance_term = 1` (the default): each collapse once half the");
-    println!("input's faces are gone also pays `A·d²` for how far it moves the faces it changes, measured on those");
-    println!("faces alone; `guard = 1`: each collapse pays for the distance");
+    println!("The tables above use the paper's cost. `distance_term = 1` (the default): each collapse ranks by its");
+    println!("quadric error per unit of area and, once 70% of the input's faces are gone, also pays `d²` for how far");
+    println!(
+        "it moves the faces it changes, measured on those faces alone; `guard = 1`: each collapse pays for the distance"
+    );
     println!(
         "it opens between result and input, measured both ways against the input (see `meshlod_engine::simplify`,"
     );
