@@ -48,26 +48,25 @@
 //! (a thin wall, the tunnel of a small hole) is cheap to move for being small. With the term, a
 //! candidate is ranked by `(vᵀQv / A + distance_term · d²)` (then the QFVP normal factor): its
 //! quadric error per unit of A, the area behind the merged quadric (a mean squared distance to its
-//! planes), plus d², d the farthest the collapse moves the
-//! surface as its moved faces alone show it (`fan_term`): from each moved face's new centroid to
-//! the plane it had, and from each endpoint to the planes of its moved faces; for a collapse of two
-//! border vertices, also how far each endpoint is from the border's new line. It reads only what
-//! the legality checks read next, and is queued lazily like the guard below. It is measured once
-//! 70% of the input's faces are gone (`fan_term::FAN_TERM_FROM`): before that, collapses move the
-//! surface so little that the term bought little accuracy for its time (they are ranked per unit
-//! of area all the same); with it the default
-//! beats both meshoptimizer and MeshLab's quadric collapse on most cells of
+//! planes), plus d², d the farthest the collapse moves the surface as its moved faces alone show it
+//! (`fan_term`): from each moved face's new centroid to the plane it had, and from each endpoint to
+//! the planes of its moved faces; for a collapse of two border vertices, also how far each endpoint
+//! is from the border's new line. It reads only what the legality checks read next, and is queued
+//! lazily like the guard below. It is measured once 70% of the input's faces are gone
+//! (`fan_term::FAN_TERM_FROM`): before that, collapses move the surface so little that the term
+//! bought little accuracy for its time (they are ranked per unit of area all the same); with it the
+//! default beats both meshoptimizer and MeshLab's quadric collapse on most cells of
 //! docs/meshlab-comparison.md, at the price in time given in docs/benchmarks.md. 0 gives the
-//! paper's cost unchanged (`vᵀQv`, not over the area). Meshes with texture coordinates go without it (their placement keeps
-//! endpoints): on two of the eight textured assets the term raised the position error, at 2–5×
-//! meshoptimizer's time (docs/attributes-report.md).
+//! paper's cost unchanged (`vᵀQv`, not over the area). Meshes with texture coordinates go without
+//! it (their placement keeps endpoints): on two of the eight textured assets the term raised the
+//! position error, at 2–5× meshoptimizer's time (docs/attributes-report.md).
 //!
 //! ## The distance guard (optional, [`SimplifyOptions::guard`])
 //! Quadric error has a blind spot: shortening a thin tip (a cow's horn, a finger) moves its apex
 //! along planes nearly parallel to the move, so the collapse looks cheap while the Hausdorff
 //! distance jumps. With the guard a candidate is ranked by `(vᵀQv / A + guard · d²)` (then the
-//! QFVP normal factor as usual), per unit of area as with the fan-distance term, with d
-//! a measured distance, both ways: from the input vertices merged into the endpoints (up to
+//! QFVP normal factor as usual), per unit of area as with the fan-distance term, with d a measured
+//! distance, both ways: from the input vertices merged into the endpoints (up to
 //! `guard::WITNESSES` each, the farthest) to the fan the collapse would create, and from the new
 //! position and the new faces' centroids to the input surface (`guard::DistanceGuard`). The term only
 //! adds, so entries are queued without it and measured when they reach the top: one that is no

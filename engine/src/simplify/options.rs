@@ -141,9 +141,8 @@ pub struct SimplifyOptions {
     /// setting). With it, each QEM/QFVP collapse is ranked by its quadric error over A, the surface
     /// area behind the merged quadric, plus `guard · d²`, before the normal factor: d a measured
     /// distance between the collapse's new fan and the input surface, both ways (the module doc's
-    /// "distance guard"). It
-    /// covers quadric error's blind spot, a thin tip shortened along its own faces, at a price in
-    /// time and memory given in docs/benchmarks.md; not with Melax.
+    /// "distance guard"). It covers quadric error's blind spot, a thin tip shortened along its own
+    /// faces, at a price in time and memory given in docs/benchmarks.md; not with Melax.
     pub guard: f64,
     /// Weight of the fan-distance term, ≥ 0 (default [`DEFAULT_DISTANCE_TERM`]; 0 leaves the
     /// paper's cost as it is). Each QEM/QFVP collapse is ranked by its quadric error over A, the
