@@ -267,6 +267,27 @@ fn simplify_pm_lod_chain() {
     fails_with(&["simplify", s(&input), "-o", s(&out), "--distance-term", "NaN"], "distance_term");
 }
 
+/// A run that stops above its target says which rules held its edges: the refusals by rule sum to
+/// `rejected`, and the text names them.
+#[test]
+fn simplify_names_the_rules_that_refused_its_last_collapses() {
+    let dir = tempdir("refusals");
+    let tetra = dir.join("tetra.obj");
+    std::fs::write(&tetra, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n").unwrap();
+    let out = dir.join("out.obj");
+    let report = ok_json(&["simplify", s(&tetra), "-o", s(&out), "--faces", "1", "--json"]);
+    assert_eq!(report["stop_reason"], "no_legal_collapse", "{report}");
+    let refused = report["refused"].as_object().expect("refused by rule");
+    let total: u64 = refused.values().map(|n| n.as_u64().unwrap()).sum();
+    // Every edge of a tetrahedron leaves its merged vertex two faces: rule 3 refuses them all.
+    assert!(total > 0 && refused["too_few_faces"].as_u64() == Some(total), "{report}");
+    assert_eq!(report["rejected"].as_u64(), Some(total), "{report}");
+    let text = meshlod(&["simplify", s(&tetra), "-o", s(&out), "--faces", "1"]);
+    assert!(text.status.success());
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(text.contains(&format!("{total} refused ({total} too few faces)")), "{text}");
+}
+
 #[test]
 fn refine_both_directions() {
     let dir = tempdir("refine");

@@ -63,6 +63,21 @@ async fn every_rpc_over_loopback() {
     // The same result as the engine in process (and so as the CLI, which calls the same engine).
     let local = simplify(&mesh, &SimplifyOptions { target_ratio: Some(0.9), ..Default::default() }).unwrap();
     assert_eq!(local.mesh, out);
+    // The refusals by rule, as the engine counts them; a run that stops above its target says
+    // what held it (every edge of a tetrahedron leaves two faces at its merged vertex).
+    let (refused, r) = (stats.refused.unwrap(), local.stats.refused);
+    let by_rule = [r.link, r.too_few_faces, r.normal_change, r.needle, r.fold, r.seam, r.uv_flip].map(|n| n as u64);
+    let sent = [refused.link, refused.too_few_faces, refused.normal_change, refused.needle, refused.fold];
+    assert_eq!(sent.iter().chain([&refused.seam, &refused.uv_flip]).copied().collect::<Vec<_>>(), by_rule.to_vec());
+    assert_eq!(stats.rejected, by_rule.iter().sum::<u64>());
+    let tetra = Mesh::new(
+        vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+    )
+    .unwrap();
+    let held = client.simplify(simplify_request(&tetra, 0.9)).await.unwrap().into_inner().stats.unwrap();
+    assert_eq!(held.stop_reason, "no_legal_collapse");
+    assert!(held.rejected > 0 && held.refused.unwrap().too_few_faces == held.rejected, "{held:?}");
 
     // The distance guard travels in the options: the same result as in process, not the unguarded one.
     let mut request = simplify_request(&mesh, 0.9);

@@ -156,10 +156,23 @@ fn run_simplify(executor: &dyn Executor, args: &SimplifyArgs) -> Result<()> {
         "1" => format!(", 1 {one}"),
         n => format!(", {n} {many}"),
     };
+    // The rules behind the refusals, most first: what held the edges of a run that stopped
+    // above its target.
+    let mut rules: Vec<(u64, &str)> = report["refused"]
+        .as_object()
+        .map(|r| r.iter().filter_map(|(rule, n)| n.as_u64().filter(|&n| n > 0).map(|n| (n, rule.as_str()))).collect())
+        .unwrap_or_default();
+    rules.sort_by(|x, y| y.0.cmp(&x.0).then(x.1.cmp(y.1)));
+    let rules = if rules.is_empty() {
+        String::new()
+    } else {
+        let named: Vec<String> = rules.iter().map(|(n, rule)| format!("{n} {}", rule.replace('_', " "))).collect();
+        format!(" ({})", named.join(", "))
+    };
     let holes = counted("holes_closed", "triangular hole closed", "triangular holes closed");
     let parts = counted("parts_removed", "part taken out", "parts taken out");
     out!(
-        "{} → {} faces, {} → {} vertices ({}): {} collapses, {} refused, {} frozen vertices{holes}{parts}",
+        "{} → {} faces, {} → {} vertices ({}): {} collapses, {} refused{rules}, {} frozen vertices{holes}{parts}",
         text(&report, "faces_in"),
         text(&report, "faces_out"),
         text(&report, "vertices_in"),

@@ -53,6 +53,7 @@ pub fn simplify(s: &proto::SimplifyStats, measured: Option<&proto::HausdorffRepo
         "collapses": s.collapses,
         "stop_reason": s.stop_reason,
         "rejected": s.rejected,
+        "refused": refused(s.refused.as_ref()),
         "frozen_vertices": s.frozen_vertices,
         "holes_closed": s.holes_closed,
         "parts_removed": s.parts_removed,
@@ -74,6 +75,20 @@ pub fn simplify(s: &proto::SimplifyStats, measured: Option<&proto::HausdorffRepo
         report.extend(hausdorff(d));
     }
     report
+}
+
+/// The refused candidates by rule (they sum to `rejected`), every rule named.
+fn refused(r: Option<&proto::Refusals>) -> Value {
+    let r = r.copied().unwrap_or_default();
+    json!({
+        "link": r.link,
+        "too_few_faces": r.too_few_faces,
+        "normal_change": r.normal_change,
+        "needle": r.needle,
+        "fold": r.fold,
+        "seam": r.seam,
+        "uv_flip": r.uv_flip,
+    })
 }
 
 /// The progressive-mesh keys of a simplify report whose `.pm` file has `bytes` bytes.
