@@ -288,6 +288,41 @@ fn simplify_names_the_rules_that_refused_its_last_collapses() {
     assert!(text.contains(&format!("{total} refused ({total} too few faces)")), "{text}");
 }
 
+/// A double-sided sheet modelled with two faces simplifies, both sides kept, and the report says
+/// so; asked for a progressive mesh, it warns that the file holds the front.
+#[test]
+fn a_double_sided_sheet_simplifies_and_says_what_the_progressive_mesh_holds() {
+    let dir = tempdir("double-sided");
+    let sheet = dir.join("sheet.obj");
+    let mut obj = String::new();
+    for j in 0..5 {
+        for i in 0..5 {
+            obj += &format!("v {i} {j} {}\n", ((i * 7 + j * 3) % 5) as f32 * 0.1);
+        }
+    }
+    let mut faces = Vec::new();
+    for j in 0..4 {
+        for i in 0..4 {
+            let v = j * 5 + i + 1;
+            faces.extend([[v, v + 1, v + 6], [v, v + 6, v + 5]]);
+        }
+    }
+    for [a, b, c] in faces.iter().chain(faces.iter().map(|[a, b, c]| [*a, *c, *b]).collect::<Vec<_>>().iter()) {
+        obj += &format!("f {a} {b} {c}\n");
+    }
+    std::fs::write(&sheet, obj).unwrap();
+    let (out, pm) = (dir.join("out.obj"), dir.join("out.pm"));
+    let report = ok_json(&["simplify", s(&sheet), "-o", s(&out), "--ratio", "0.5", "--pm", s(&pm), "--json"]);
+    assert_eq!(report["back_faces"], 32, "{report}");
+    assert_eq!(report["stop_reason"], "target_reached", "{report}");
+    assert!(report["warnings"].to_string().contains("the progressive mesh and its levels the one sheet"), "{report}");
+    let info = ok_json(&["info", s(&out), "--json"]);
+    assert_eq!(info["faces"], report["faces_out"], "{info}");
+    // Without a progressive mesh nothing is lost, and nothing is said.
+    let report = ok_json(&["simplify", s(&sheet), "-o", s(&out), "--ratio", "0.5", "--json"]);
+    assert_eq!(report["warnings"], serde_json::json!([]), "{report}");
+}
+
 #[test]
 fn refine_both_directions() {
     let dir = tempdir("refine");

@@ -171,8 +171,10 @@ fn run_simplify(executor: &dyn Executor, args: &SimplifyArgs) -> Result<()> {
     };
     let holes = counted("holes_closed", "triangular hole closed", "triangular holes closed");
     let parts = counted("parts_removed", "part taken out", "parts taken out");
+    let copies = counted("dropped_duplicate_faces", "duplicate face dropped", "duplicate faces dropped");
+    let backs = counted("back_faces", "back face kept with its front", "back faces kept with their fronts");
     out!(
-        "{} → {} faces, {} → {} vertices ({}): {} collapses, {} refused{rules}, {} frozen vertices{holes}{parts}",
+        "{} → {} faces, {} → {} vertices ({}): {} collapses, {} refused{rules}, {} frozen vertices{holes}{parts}{copies}{backs}",
         text(&report, "faces_in"),
         text(&report, "faces_out"),
         text(&report, "vertices_in"),

@@ -132,13 +132,25 @@ pub fn simplify(
         w_candidates,
         guard: options.guard,
         distance_term: s.distance_term,
-        warnings: simplify_warnings(o).into_iter().chain(mesh.corners.not_carried_warning()).collect(),
+        warnings: simplify_warnings(o)
+            .into_iter()
+            .chain(mesh.corners.not_carried_warning())
+            .chain((o.return_progressive && s.back_faces > 0).then(|| {
+                format!(
+                    "{} back faces (a double-sided sheet modelled with two faces): the result has both sides, \
+                     the progressive mesh and its levels the one sheet",
+                    s.back_faces
+                )
+            }))
+            .collect(),
         frozen_vertices: s.frozen_vertices as u32,
         holes_closed: s.holes_closed as u32,
         parts_removed: s.parts_removed as u32,
         target_faces: s.target_faces as u32,
         rejected: s.rejected as u64,
         refused: Some(refusals(&s.refused)),
+        dropped_duplicate_faces: s.dropped_duplicate_faces as u32,
+        back_faces: s.back_faces as u32,
         placement: format!("{:?}", result.stats.placement).to_lowercase(),
         normals: match options.normals {
             NormalUpdate::Linear => "linear".into(),

@@ -54,6 +54,8 @@ pub fn simplify(s: &proto::SimplifyStats, measured: Option<&proto::HausdorffRepo
         "stop_reason": s.stop_reason,
         "rejected": s.rejected,
         "refused": refused(s.refused.as_ref()),
+        "dropped_duplicate_faces": s.dropped_duplicate_faces,
+        "back_faces": s.back_faces,
         "frozen_vertices": s.frozen_vertices,
         "holes_closed": s.holes_closed,
         "parts_removed": s.parts_removed,

@@ -59,6 +59,11 @@ pub(crate) struct State<'o> {
     /// Vertices on a border or frozen at the start: a collapse that takes one face instead of two
     /// removes one of them, so they bound how far the run's log outgrows half the faces removed.
     pub(super) open_vertices: usize,
+    /// The vertices the scan found frozen (non-manifold or inconsistently oriented neighbourhoods).
+    pub(super) frozen_at_start: Vec<u32>,
+    /// Per face, whether a back face was set aside for it (`super::sheets`): it counts twice
+    /// towards the target. Empty when none was.
+    pub(super) backed: Vec<bool>,
     /// Counts the calls of `is_legal`: a [`Legal`] token from the latest call (the one whose new
     /// face normals `fan_scratch` holds) carries the current count.
     pub(super) check_id: u32,
@@ -214,9 +219,12 @@ impl<'o> State<'o> {
             || face_pass(mesh),
         );
         let lock = options.boundary == BoundaryMode::Lock;
-        let mut open_vertices = 0;
-        for (vertex, kind) in vertices.iter_mut().zip(kind) {
+        let (mut open_vertices, mut frozen_at_start) = (0, Vec::new());
+        for (v, (vertex, kind)) in vertices.iter_mut().zip(kind).enumerate() {
             open_vertices += matches!(kind, VertexKind::Boundary | VertexKind::Frozen) as usize;
+            if kind == VertexKind::Frozen {
+                frozen_at_start.push(v as u32);
+            }
             vertex.kind = match kind {
                 VertexKind::Boundary if lock => VertexKind::Anchored,
                 kind => kind,
@@ -244,6 +252,8 @@ impl<'o> State<'o> {
             fan_scratch: Vec::new(),
             spoke: vec![0; vertex_count],
             open_vertices,
+            frozen_at_start,
+            backed: Vec::new(),
             check_id: 0,
             cos_max_normal_change: options.max_normal_change_degrees.to_radians().cos(),
             guard: None,

@@ -12,7 +12,10 @@
 //! Data flows in this order, one room each, and [`simplify`] below reads the same way:
 //! 1. `options` — the options checked ([`SimplifyOptions::validate`]) and the face target;
 //! 2. `classify` — preparation (faces that repeat a vertex dropped) and one scan of the fans that
-//!    classifies every vertex;
+//!    classifies every vertex; `sheets` — faces stacked on another (a copy, or the back of a
+//!    double-sided sheet modelled with two faces) freeze their vertices: where the scan found
+//!    frozen vertices, such faces are set aside (a copy dropped, a back written again reversed beside
+//!    its front's output face) and the state made again without them;
 //! 3. `kernel` — the working state: fans, quadrics, Gouraud normals, alive flags, version stamps;
 //! 4. `cost` and `placement` — the cost of an edge and where its merged vertex goes;
 //!    `queue` — the key an edge is queued under (stale entries skipped by per-vertex version
@@ -143,6 +146,7 @@ mod queue;
 mod retry;
 mod run;
 mod search;
+mod sheets;
 
 use std::time::Instant;
 
@@ -192,13 +196,28 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     };
     // 2–3. Classification and working state. Melax's cost reads face normals through the triangle
     // array; the quadric costs never do, so the array is rebuilt once at the end instead.
-    let (mut state, edges) = State::with_tracking(&prepared, options, options.metric == Metric::Melax);
+    let track = options.metric == Metric::Melax;
+    let (mut state, mut edges) = State::with_tracking(&prepared, options, track);
+    // Faces stacked on another (copies, back-to-back twins) freeze their vertices: set aside, and
+    // the state made again for the one sheet (`sheets`).
+    let stacked = state.stacked_faces(&prepared);
+    let (prepared, set_aside) = if stacked.is_empty() {
+        (prepared, sheets::Stacked::default())
+    } else {
+        let (sheet, set_aside) = sheets::one_sided(&prepared, &stacked);
+        (state, edges) = State::with_tracking(&sheet, options, track);
+        (std::borrow::Cow::Owned(sheet), set_aside)
+    };
+    // A face with a back set aside counts twice towards the target: the output has both.
+    state.backed = set_aside.twinned.clone();
+    let sheet_faces = prepared.face_count();
+    let output_faces = sheet_faces + set_aside.twins;
     state.carry_attributes(&prepared);
     // 4. Every edge queued.
-    let heap = run::initial_queue(&state, edges, faces_in);
+    let heap = run::initial_queue(&state, edges, sheet_faces);
     // 5. The loop (with the parts it may take out whole, when asked to).
     let parts = options.prune.then(|| prune::Parts::new(&prepared, &units)).flatten();
-    let mut run = run::run(&mut state, heap, parts, &units, faces_in, target)?;
+    let mut run = run::run(&mut state, heap, parts, &units, output_faces, target)?;
     let collapses = run.log.len();
     let holes_closed = run.log.iter().filter(|r| r.hole != crate::pm::NO_VERTEX).count();
     // 6. Outputs. The guard's tree and tables are done with: their memory goes back first.
@@ -208,7 +227,11 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     // pool has threads for them.
     let (simplified, progressive) = crate::parallel::join(
         faces_in,
-        || state.output_mesh(),
+        || {
+            let out = state.output_mesh();
+            let live = (0..state.face_alive.len()).filter(|&f| state.face_alive[f]);
+            sheets::with_backs(out, live, &set_aside.twinned)
+        },
         || {
             options.record_progressive.then(|| {
                 ProgressiveMesh::from_log(
@@ -247,6 +270,8 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
         holes_closed,
         parts_removed: run.parts_removed,
         dropped_degenerate_faces: dropped,
+        dropped_duplicate_faces: set_aside.copies,
+        back_faces: set_aside.twins,
         distance_term: state.fan_term,
         seconds: started.elapsed().as_secs_f64(),
     };

@@ -100,7 +100,10 @@ pub(super) fn run(
 ) -> Result<Run, MeshError> {
     let options = state.options;
     let vertex_count = state.vertices.len();
+    // The faces left: `faces_alive` counts a face whose back was set aside twice, as the output
+    // (and so the target) has both (`super::sheets`); `live` counts the state's faces once each.
     let mut faces_alive = faces_in;
+    let mut live = state.face_alive.len();
     let mut log: Vec<CollapseRecord> =
         Vec::with_capacity(log_reserve(faces_in, target, state.open_vertices, vertex_count));
     let mut neighbours = Vec::new();
@@ -114,16 +117,18 @@ pub(super) fn run(
     let mut collapses_this_pass = 0;
     let mut max_collapse_error: f64 = 0.0;
     // The face count from which the distance term is measured: the guard's from the start, the
-    // fan-distance term's once half the input's faces are gone ([`super::fan_term::FAN_TERM_FROM`]).
+    // fan-distance term's once 70% of the input's faces are gone ([`super::fan_term::FAN_TERM_FROM`]).
     let term_from = if state.guard.is_some() {
-        faces_in
+        live
     } else {
-        (faces_in as f64 * (1.0 - super::fan_term::FAN_TERM_FROM)).round() as usize
+        (live as f64 * (1.0 - super::fan_term::FAN_TERM_FROM)).round() as usize
     };
     let stop_reason = loop {
         // Parts as small as the error reached so far go whole, while the target allows.
         if let Some(parts) = &mut parts {
-            faces_alive -= parts.prune(state, max_collapse_error, faces_alive, target);
+            let removed = parts.prune(state, max_collapse_error, faces_alive, target);
+            faces_alive -= removed;
+            live -= removed;
         }
         // Stop: the face target is met.
         if faces_alive <= target {
@@ -167,7 +172,7 @@ pub(super) fn run(
             continue; // stale: an endpoint changed (or was removed) since this entry was queued
         }
         let mut chosen = None;
-        if state.has_distance_term() && entry.b & GUARDED == 0 && faces_alive <= term_from {
+        if state.has_distance_term() && entry.b & GUARDED == 0 && live <= term_from {
             // Queued without the distance term, which only adds: rank it with the term now, and
             // put it back unless it still comes first (the result is the greedy order of the
             // full costs, at one measurement per candidate that reaches the top).
@@ -206,7 +211,8 @@ pub(super) fn run(
         let mut record = state.collapse(legal);
         max_collapse_error = max_collapse_error.max(error_paper);
         record.error = max_collapse_error as f32;
-        faces_alive -= (record.left_face != NONE) as usize + (record.right_face != NONE) as usize;
+        faces_alive -= state.output_faces(record.left_face) + state.output_faces(record.right_face);
+        live -= (record.left_face != NONE) as usize + (record.right_face != NONE) as usize;
         let (opposite, hole) = ([record.left, record.right], record.hole);
         log.push(record);
         collapses_this_pass += 1;
@@ -232,7 +238,7 @@ pub(super) fn run(
         // pushes (refills then come seldom: fandisk's planar regions) they pile up instead. A mesh
         // has about 1.5 edges per face, so once the queue holds more than 2 entries per face a
         // quarter or more are stale: one linear sweep drops them.
-        if heap.len() > 2 * faces_alive {
+        if heap.len() > 2 * live {
             heap.sweep(|e| state.is_current(e));
         }
     };

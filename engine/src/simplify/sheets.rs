@@ -1,0 +1,209 @@
+//! Faces stacked on the same three vertices: exact copies of a face, and back-to-back twins (a face
+//! and its reverse, as a double-sided sheet is often modelled). Either gives each edge of the face
+//! more than two faces, which freezes its vertices (rule 1): a double-sided mesh did not simplify
+//! at all. A run sets them aside first: a copy is dropped; a twin is simplified with the face it
+//! backs, as one sheet, and each output face whose input face had a twin is written again,
+//! reversed, beside it. Only a face whose corners carry the same values as the face it stacks on
+//! (vertex by vertex) is set aside; the others stay, and freeze their vertices as before (a back
+//! face whose normals point the other way, for one).
+
+use crate::mesh::Mesh;
+
+use super::kernel::{NONE, State};
+
+/// What a run set aside of the faces stacked on another ([module docs](self)).
+#[derive(Debug, Default)]
+pub(super) struct Stacked {
+    /// Faces that copy an earlier face, dropped.
+    pub(super) copies: usize,
+    /// Faces that back an earlier face, simplified with it and written back reversed.
+    pub(super) twins: usize,
+    /// Per face of the one-sided mesh, whether a twin backs it.
+    pub(super) twinned: Vec<bool>,
+}
+
+impl State<'_> {
+    /// The faces face `f` stands for in the output: itself and its back, if one was set aside for
+    /// it (none for [`NONE`]).
+    #[inline]
+    pub(super) fn output_faces(&self, f: u32) -> usize {
+        if f == NONE { 0 } else { 1 + self.backed.get(f as usize).is_some_and(|&b| b) as usize }
+    }
+
+    /// The faces of `mesh` (the state's) stacked on an earlier face with the same values: (face,
+    /// the face it stacks on, whether it is a twin rather than a copy), in face order. Such faces
+    /// freeze their vertices, so only the fans of the vertices the scan found frozen are looked
+    /// at: a mesh without them costs nothing.
+    pub(super) fn stacked_faces(&self, mesh: &Mesh) -> Vec<(u32, u32, bool)> {
+        let mut found = Vec::new();
+        let mut at = Vec::new();
+        for &v in &self.frozen_at_start {
+            // Each face once: at its lowest vertex, by its other two (unordered), then by number.
+            at.clear();
+            at.extend(
+                self.fans[v as usize]
+                    .iter()
+                    .filter(|c| v < c.next && v < c.prev)
+                    .map(|c| (c.next.min(c.prev), c.next.max(c.prev), c.face, c.next)),
+            );
+            at.sort_unstable();
+            for run in at.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)).filter(|run| run.len() > 1) {
+                let (_, _, base, base_next) = run[0];
+                let mut backed = false;
+                for &(_, _, face, next) in &run[1..] {
+                    if !same_values(mesh, base, face) {
+                        continue;
+                    }
+                    // A second twin copies the first: dropped as a copy.
+                    let twin = next != base_next && !backed;
+                    backed |= twin;
+                    found.push((face, base, twin));
+                }
+            }
+        }
+        found.sort_unstable();
+        found
+    }
+}
+
+/// Whether faces `f` and `g`, on the same three vertices, carry the same values at each.
+fn same_values(mesh: &Mesh, f: u32, g: u32) -> bool {
+    let (tf, tg) = (mesh.triangles[f as usize], mesh.triangles[g as usize]);
+    mesh.corners.is_empty()
+        || (0..3).all(|k| {
+            let j = tg.iter().position(|&x| x == tf[k]).expect("the same three vertices");
+            mesh.corners.same(3 * f as usize + k, 3 * g as usize + j)
+        })
+}
+
+/// `mesh` without the `stacked` faces ([`State::stacked_faces`]), and what was set aside. The
+/// vertices stay as they are (each is on the face its stacked faces rest on).
+pub(super) fn one_sided(mesh: &Mesh, stacked: &[(u32, u32, bool)]) -> (Mesh, Stacked) {
+    let mut aside = vec![false; mesh.face_count()];
+    let mut backed = vec![false; mesh.face_count()];
+    let mut set = Stacked::default();
+    for &(face, base, twin) in stacked {
+        aside[face as usize] = true;
+        backed[base as usize] |= twin;
+        if twin {
+            set.twins += 1;
+        } else {
+            set.copies += 1;
+        }
+    }
+    let kept: Vec<usize> = (0..mesh.face_count()).filter(|&f| !aside[f]).collect();
+    set.twinned = kept.iter().map(|&f| backed[f]).collect();
+    let triangles = kept.iter().map(|&f| mesh.triangles[f]).collect();
+    let corners = if mesh.corners.is_empty() {
+        Default::default()
+    } else {
+        mesh.corners.pick(kept.iter().flat_map(|&f| [3 * f, 3 * f + 1, 3 * f + 2]))
+    };
+    (Mesh { positions: mesh.positions.clone(), triangles, corners }, set)
+}
+
+/// `out` (the one-sided result) with each face whose input face was `twinned` written again,
+/// reversed, after the others; `live` gives, for each face of `out` in order, its face of the
+/// one-sided mesh (`twinned` empty: nothing was set aside).
+pub(super) fn with_backs(mut out: Mesh, live: impl Iterator<Item = usize>, twinned: &[bool]) -> Mesh {
+    if twinned.is_empty() {
+        return out;
+    }
+    let backed: Vec<usize> = live.enumerate().filter(|&(_, f)| twinned[f]).map(|(i, _)| i).collect();
+    if backed.is_empty() {
+        return out;
+    }
+    let n = out.face_count();
+    for &i in &backed {
+        let [a, b, c] = out.triangles[i];
+        out.triangles.push([a, c, b]);
+    }
+    if !out.corners.is_empty() {
+        let reversed = backed.iter().flat_map(|&i| [3 * i, 3 * i + 2, 3 * i + 1]);
+        out.corners = out.corners.pick((0..3 * n).chain(reversed));
+    }
+    debug_assert!(out.check().is_ok());
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{SimplifyOptions, StopReason, simplify};
+    use crate::mesh::Mesh;
+    use crate::procedural;
+
+    fn to(faces: usize) -> SimplifyOptions {
+        SimplifyOptions {
+            target_faces: Some(faces),
+            target_ratio: None,
+            record_progressive: true,
+            ..Default::default()
+        }
+    }
+
+    fn reversed(t: [u32; 3]) -> [u32; 3] {
+        [t[0], t[2], t[1]]
+    }
+
+    /// A sheet modelled double-sided (each face and its reverse) freezes every vertex as it is;
+    /// set aside, its back faces follow the front: the front simplifies as the sheet alone does,
+    /// and each of its faces comes out with its reverse. The progressive mesh is the front's.
+    #[test]
+    fn a_double_sided_sheet_simplifies_as_its_front_and_keeps_both_sides() {
+        let front = procedural::terrain(24, 3);
+        let n = front.face_count();
+        let mut both = front.clone();
+        both.triangles.extend(front.triangles.iter().map(|&t| reversed(t)));
+        let alone = simplify(&front, &to(n / 10)).unwrap();
+        let out = simplify(&both, &to(2 * (n / 10))).unwrap();
+        assert_eq!(out.stats.stop_reason, StopReason::TargetReached);
+        assert_eq!((out.stats.back_faces, out.stats.dropped_duplicate_faces), (n, 0));
+        assert_eq!(out.stats.faces_in, 2 * n);
+        let k = alone.mesh.face_count();
+        assert_eq!(out.mesh.face_count(), 2 * k);
+        assert_eq!(out.mesh.positions, alone.mesh.positions);
+        assert_eq!(out.mesh.triangles[..k], alone.mesh.triangles[..]);
+        let backs: Vec<[u32; 3]> = alone.mesh.triangles.iter().map(|&t| reversed(t)).collect();
+        assert_eq!(out.mesh.triangles[k..], backs[..]);
+        // (Levels number their vertices in the order the splits bring them: compared by position.)
+        let faces = |m: &Mesh| {
+            let mut f: Vec<[[u32; 3]; 3]> =
+                m.triangles.iter().map(|t| t.map(|v| m.positions[v as usize].map(f32::to_bits))).collect();
+            for t in &mut f {
+                let first = (0..3).min_by_key(|&k| t[k]).expect("three corners");
+                t.rotate_left(first);
+            }
+            f.sort_unstable();
+            f
+        };
+        let pm = out.progressive.unwrap();
+        assert_eq!(faces(&pm.at_level(pm.levels())), faces(&front));
+        // What the set-aside avoids: the two sides together freeze every vertex but a corner or
+        // two of the grid (whose edges all have the two faces, one each way, of a manifold edge).
+        let defaults = to(0);
+        let (state, _) = super::super::State::new(&both, &defaults);
+        let frozen = state.frozen_at_start.len();
+        assert!(frozen + 4 >= both.vertex_count(), "{frozen} frozen");
+    }
+
+    /// Exact copies go (the result is the one of the mesh without them); faces on the same three
+    /// vertices with other values stay, and freeze their vertices as before.
+    #[test]
+    fn copies_are_dropped_and_stacked_faces_with_other_values_stay() {
+        let sphere = procedural::icosphere(3);
+        let mut copied = sphere.clone();
+        copied.triangles.extend_from_slice(&sphere.triangles[..10]);
+        let options = to(sphere.face_count() / 10);
+        let out = simplify(&copied, &options).unwrap();
+        assert_eq!((out.stats.dropped_duplicate_faces, out.stats.back_faces), (10, 0));
+        assert_eq!(out.mesh, simplify(&sphere, &options).unwrap().mesh);
+        // The same copies with texture coordinates of their own.
+        let corners = copied.face_count() * 3;
+        let uvs = (0..corners).map(|k| if k < sphere.face_count() * 3 { [0.0, 0.0] } else { [1.0, 1.0] }).collect();
+        let mut distinct: Mesh = copied.clone();
+        distinct.corners.uvs = Some(uvs);
+        let out = simplify(&distinct, &options).unwrap();
+        assert_eq!(out.stats.dropped_duplicate_faces, 0);
+        assert!(out.stats.frozen_vertices > 0, "{:?}", out.stats);
+    }
+}
