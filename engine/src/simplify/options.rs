@@ -265,10 +265,10 @@ pub struct SimplifyStats {
     /// Faces dropped before simplifying because they copy another face: the same three vertices,
     /// the same way round, the same values.
     pub dropped_duplicate_faces: usize,
-    /// Faces that back another (the same three vertices the other way round, the same values: a
-    /// double-sided sheet modelled with two faces): simplified with the face they back, as one
-    /// sheet, and written again, reversed, beside each output face whose input face had one. The
-    /// progressive mesh holds the one sheet.
+    /// Faces that back another (the same three vertices the other way round, the same values but
+    /// for normals, which may point the other way: a double-sided sheet modelled with two faces):
+    /// simplified with the face they back, as one sheet, and written again, reversed, beside each
+    /// output face whose input face had one. The progressive mesh holds the one sheet.
     pub back_faces: usize,
     /// The fan-distance term's weight that applied: 0 where it was off or did not apply (Melax,
     /// the distance guard on, texture coordinates carried). It is measured once 70% of the input's

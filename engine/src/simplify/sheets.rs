@@ -1,15 +1,37 @@
 //! Faces stacked on the same three vertices: exact copies of a face, and back-to-back twins (a face
 //! and its reverse, as a double-sided sheet is often modelled). Either gives each edge of the face
 //! more than two faces, which freezes its vertices (rule 1): a double-sided mesh did not simplify
-//! at all. A run sets them aside first: a copy is dropped; a twin is simplified with the face it
-//! backs, as one sheet, and each output face whose input face had a twin is written again,
+//! at all. A run sets them aside first: a copy is dropped; a back is simplified with the face it
+//! backs, as one sheet, and each output face whose input face had a back is written again,
 //! reversed, beside it. Only a face whose corners carry the same values as the face it stacks on
-//! (vertex by vertex) is set aside; the others stay, and freeze their vertices as before (a back
-//! face whose normals point the other way, for one).
+//! (vertex by vertex) is set aside, but for a back's normals, which may point the other way (the
+//! back lit from behind): its output copy then has the front's normals turned round. The others
+//! stay, and freeze their vertices as before.
 
 use crate::mesh::Mesh;
 
 use super::kernel::{NONE, State};
+
+/// The back set aside for a face of the one-sided mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Default)]
+pub(super) enum Back {
+    #[default]
+    None,
+    /// With the face's own values.
+    Same,
+    /// With its values but for normals pointing the other way.
+    Flipped,
+}
+
+/// A face stacked on an earlier one ([`State::stacked_faces`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub(super) struct StackedFace {
+    pub(super) face: u32,
+    /// The face it stacks on.
+    pub(super) on: u32,
+    /// `None` for a copy (same way round), else the kind of back.
+    pub(super) back: Option<Back>,
+}
 
 /// What a run set aside of the faces stacked on another ([module docs](self)).
 #[derive(Debug, Default)]
@@ -18,8 +40,8 @@ pub(super) struct Stacked {
     pub(super) copies: usize,
     /// Faces that back an earlier face, simplified with it and written back reversed.
     pub(super) twins: usize,
-    /// Per face of the one-sided mesh, whether a twin backs it.
-    pub(super) twinned: Vec<bool>,
+    /// Per face of the one-sided mesh, its back (empty when none was set aside).
+    pub(super) backs: Vec<Back>,
 }
 
 impl State<'_> {
@@ -30,11 +52,10 @@ impl State<'_> {
         if f == NONE { 0 } else { 1 + self.backed.get(f as usize).is_some_and(|&b| b) as usize }
     }
 
-    /// The faces of `mesh` (the state's) stacked on an earlier face with the same values: (face,
-    /// the face it stacks on, whether it is a twin rather than a copy), in face order. Such faces
-    /// freeze their vertices, so only the fans of the vertices the scan found frozen are looked
-    /// at: a mesh without them costs nothing.
-    pub(super) fn stacked_faces(&self, mesh: &Mesh) -> Vec<(u32, u32, bool)> {
+    /// The faces of `mesh` (the state's) stacked on an earlier face with its values, in face
+    /// order. Such faces freeze their vertices, so only the fans of the vertices the scan found
+    /// frozen are looked at: a mesh without them costs nothing.
+    pub(super) fn stacked_faces(&self, mesh: &Mesh) -> Vec<StackedFace> {
         let mut found = Vec::new();
         let mut at = Vec::new();
         for &v in &self.frozen_at_start {
@@ -48,16 +69,24 @@ impl State<'_> {
             );
             at.sort_unstable();
             for run in at.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)).filter(|run| run.len() > 1) {
-                let (_, _, base, base_next) = run[0];
-                let mut backed = false;
+                let (_, _, on, on_next) = run[0];
+                // Whether the first back found has its normals turned round.
+                let mut first_back = None;
                 for &(_, _, face, next) in &run[1..] {
-                    if !same_values(mesh, base, face) {
-                        continue;
-                    }
-                    // A second twin copies the first: dropped as a copy.
-                    let twin = next != base_next && !backed;
-                    backed |= twin;
-                    found.push((face, base, twin));
+                    let Some(flipped) = values_of(mesh, on, face) else { continue };
+                    let back = match (next != on_next, first_back) {
+                        // The same way round with its normals turned: not a copy.
+                        (false, _) if flipped => continue,
+                        (false, _) => None,
+                        (true, None) => {
+                            first_back = Some(flipped);
+                            Some(if flipped { Back::Flipped } else { Back::Same })
+                        }
+                        // A second back: a copy of the first, unless its normals differ from it.
+                        (true, Some(first)) if first == flipped => None,
+                        (true, Some(_)) => continue,
+                    };
+                    found.push(StackedFace { face, on, back });
                 }
             }
         }
@@ -66,33 +95,62 @@ impl State<'_> {
     }
 }
 
-/// Whether faces `f` and `g`, on the same three vertices, carry the same values at each.
-fn same_values(mesh: &Mesh, f: u32, g: u32) -> bool {
+/// How face `g`'s corners carry face `f`'s values, vertex by vertex (the two on the same three
+/// vertices): `Some(false)` the same values, `Some(true)` the same but for normals pointing the
+/// other way (all three), `None` other values.
+fn values_of(mesh: &Mesh, f: u32, g: u32) -> Option<bool> {
+    let c = &mesh.corners;
+    if c.is_empty() {
+        return Some(false);
+    }
     let (tf, tg) = (mesh.triangles[f as usize], mesh.triangles[g as usize]);
-    mesh.corners.is_empty()
-        || (0..3).all(|k| {
+    let pairs: Vec<(usize, usize)> = (0..3)
+        .map(|k| {
             let j = tg.iter().position(|&x| x == tf[k]).expect("the same three vertices");
-            mesh.corners.same(3 * f as usize + k, 3 * g as usize + j)
+            (3 * f as usize + k, 3 * g as usize + j)
         })
+        .collect();
+    if pairs.iter().all(|&(a, b)| c.same(a, b)) {
+        return Some(false);
+    }
+    let normals = c.normals.as_ref()?;
+    let bits = |n: [f32; 3]| n.map(f32::to_bits);
+    let turned = |a: usize, b: usize| bits(normals[a].map(|x| -x)) == bits(normals[b]);
+    pairs.iter().all(|&(a, b)| turned(a, b) && same_but_normals(c, a, b)).then_some(true)
+}
+
+/// [`CornerAttributes::same`](crate::mesh::CornerAttributes::same) for every value but the normal.
+fn same_but_normals(c: &crate::mesh::CornerAttributes, a: usize, b: usize) -> bool {
+    fn same<const N: usize>(values: &Option<Vec<[f32; N]>>, a: usize, b: usize) -> bool {
+        values.as_ref().is_none_or(|v| v[a].map(f32::to_bits) == v[b].map(f32::to_bits))
+    }
+    same(&c.uvs, a, b)
+        && same(&c.uvs1, a, b)
+        && same(&c.tangents, a, b)
+        && same(&c.colors, a, b)
+        && same(&c.weights, a, b)
+        && c.joints.as_ref().is_none_or(|j| j[a] == j[b])
+        && c.materials.as_ref().is_none_or(|m| m[a] == m[b])
 }
 
 /// `mesh` without the `stacked` faces ([`State::stacked_faces`]), and what was set aside. The
 /// vertices stay as they are (each is on the face its stacked faces rest on).
-pub(super) fn one_sided(mesh: &Mesh, stacked: &[(u32, u32, bool)]) -> (Mesh, Stacked) {
+pub(super) fn one_sided(mesh: &Mesh, stacked: &[StackedFace]) -> (Mesh, Stacked) {
     let mut aside = vec![false; mesh.face_count()];
-    let mut backed = vec![false; mesh.face_count()];
+    let mut backs = vec![Back::None; mesh.face_count()];
     let mut set = Stacked::default();
-    for &(face, base, twin) in stacked {
-        aside[face as usize] = true;
-        backed[base as usize] |= twin;
-        if twin {
-            set.twins += 1;
-        } else {
-            set.copies += 1;
+    for s in stacked {
+        aside[s.face as usize] = true;
+        match s.back {
+            Some(back) => {
+                backs[s.on as usize] = back;
+                set.twins += 1;
+            }
+            None => set.copies += 1,
         }
     }
     let kept: Vec<usize> = (0..mesh.face_count()).filter(|&f| !aside[f]).collect();
-    set.twinned = kept.iter().map(|&f| backed[f]).collect();
+    set.backs = kept.iter().map(|&f| backs[f]).collect();
     let triangles = kept.iter().map(|&f| mesh.triangles[f]).collect();
     let corners = if mesh.corners.is_empty() {
         Default::default()
@@ -102,25 +160,34 @@ pub(super) fn one_sided(mesh: &Mesh, stacked: &[(u32, u32, bool)]) -> (Mesh, Sta
     (Mesh { positions: mesh.positions.clone(), triangles, corners }, set)
 }
 
-/// `out` (the one-sided result) with each face whose input face was `twinned` written again,
-/// reversed, after the others; `live` gives, for each face of `out` in order, its face of the
-/// one-sided mesh (`twinned` empty: nothing was set aside).
-pub(super) fn with_backs(mut out: Mesh, live: impl Iterator<Item = usize>, twinned: &[bool]) -> Mesh {
-    if twinned.is_empty() {
+/// `out` (the one-sided result) with each face whose input face had a back written again,
+/// reversed (and with its normals turned round where the back's were), after the others; `live`
+/// gives, for each face of `out` in order, its face of the one-sided mesh (`backs` empty: nothing
+/// was set aside).
+pub(super) fn with_backs(mut out: Mesh, live: impl Iterator<Item = usize>, backs: &[Back]) -> Mesh {
+    if backs.is_empty() {
         return out;
     }
-    let backed: Vec<usize> = live.enumerate().filter(|&(_, f)| twinned[f]).map(|(i, _)| i).collect();
+    let backed: Vec<(usize, Back)> =
+        live.enumerate().filter(|&(_, f)| backs[f] != Back::None).map(|(i, f)| (i, backs[f])).collect();
     if backed.is_empty() {
         return out;
     }
     let n = out.face_count();
-    for &i in &backed {
+    for &(i, _) in &backed {
         let [a, b, c] = out.triangles[i];
         out.triangles.push([a, c, b]);
     }
     if !out.corners.is_empty() {
-        let reversed = backed.iter().flat_map(|&i| [3 * i, 3 * i + 2, 3 * i + 1]);
+        let reversed = backed.iter().flat_map(|&(i, _)| [3 * i, 3 * i + 2, 3 * i + 1]);
         out.corners = out.corners.pick((0..3 * n).chain(reversed));
+        if let Some(normals) = &mut out.corners.normals {
+            for (k, _) in backed.iter().enumerate().filter(|(_, (_, back))| *back == Back::Flipped) {
+                for n in &mut normals[3 * (n + k)..3 * (n + k + 1)] {
+                    *n = n.map(|x| -x);
+                }
+            }
+        }
     }
     debug_assert!(out.check().is_ok());
     out
@@ -184,6 +251,40 @@ mod tests {
         let (state, _) = super::super::State::new(&both, &defaults);
         let frozen = state.frozen_at_start.len();
         assert!(frozen + 4 >= both.vertex_count(), "{frozen} frozen");
+    }
+
+    /// A back whose normals point the other way (the back lit from behind, as exporters write a
+    /// double-sided sheet with normals) is set aside too: its output copy has the front's normals
+    /// turned round, corner by corner.
+    #[test]
+    fn a_back_with_normals_turned_round_comes_out_with_them_turned_round() {
+        let mut front = procedural::terrain(16, 7);
+        let n = front.face_count();
+        let normals: Vec<[f32; 3]> = (0..n)
+            .flat_map(|f| {
+                let u = front.face_area_vector(f).normalize_or_zero();
+                [[u.x as f32, u.y as f32, u.z as f32]; 3]
+            })
+            .collect();
+        front.corners.normals = Some(normals.clone());
+        let mut both = front.clone();
+        both.triangles.extend(front.triangles.iter().map(|&t| reversed(t)));
+        // The back's corners in its own order (a, c, b): the front's normals there, turned round.
+        let turned = |k: usize| normals[k].map(|x| -x);
+        let back_normals = (0..n).flat_map(|f| [turned(3 * f), turned(3 * f + 2), turned(3 * f + 1)]);
+        both.corners.normals = Some(normals.iter().copied().chain(back_normals).collect());
+        let alone = simplify(&front, &to(n / 8)).unwrap();
+        let out = simplify(&both, &to(2 * (n / 8))).unwrap();
+        assert_eq!(out.stats.back_faces, n, "{:?}", out.stats);
+        let k = alone.mesh.face_count();
+        assert_eq!(out.mesh.face_count(), 2 * k);
+        assert_eq!(out.mesh.triangles[..k], alone.mesh.triangles[..]);
+        let (got, kept) = (out.mesh.corners.normals.unwrap(), alone.mesh.corners.normals.unwrap());
+        assert_eq!(got[..3 * k], kept[..]);
+        for i in 0..k {
+            let back = [kept[3 * i], kept[3 * i + 2], kept[3 * i + 1]].map(|n| n.map(|x| -x));
+            assert_eq!(got[3 * (k + i)..3 * (k + i + 1)], back, "back of face {i}");
+        }
     }
 
     /// Exact copies go (the result is the one of the mesh without them); faces on the same three
