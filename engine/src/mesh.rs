@@ -169,6 +169,11 @@ pub enum ImageSource {
     Uri(String),
 }
 
+/// Whether corners `a` and `b` carry the same value of an attribute (bit for bit), or it is absent.
+fn same_bits<const N: usize>(values: &Option<Vec<[f32; N]>>, a: usize, b: usize) -> bool {
+    values.as_ref().is_none_or(|v| v[a].map(f32::to_bits) == v[b].map(f32::to_bits))
+}
+
 impl CornerAttributes {
     /// What the input had that is not carried ([`MaterialLibrary::not_carried`]): a warning, or
     /// `None` when nothing is left out.
@@ -337,17 +342,24 @@ impl CornerAttributes {
         self.same_values(a, b) && self.materials.as_ref().is_none_or(|m| m[a] == m[b])
     }
 
+    /// [`CornerAttributes::same`] for every attribute but the normal (a double-sided sheet's back
+    /// may carry its front's values with the normals turned round).
+    pub fn same_but_normals(&self, a: usize, b: usize) -> bool {
+        self.same_values_but_normals(a, b) && self.materials.as_ref().is_none_or(|m| m[a] == m[b])
+    }
+
     /// [`CornerAttributes::same`], the materials left out.
     fn same_values(&self, a: usize, b: usize) -> bool {
-        fn same<const N: usize>(values: &Option<Vec<[f32; N]>>, a: usize, b: usize) -> bool {
-            values.as_ref().is_none_or(|v| v[a].map(f32::to_bits) == v[b].map(f32::to_bits))
-        }
-        same(&self.uvs, a, b)
-            && same(&self.uvs1, a, b)
-            && same(&self.normals, a, b)
-            && same(&self.tangents, a, b)
-            && same(&self.colors, a, b)
-            && same(&self.weights, a, b)
+        same_bits(&self.normals, a, b) && self.same_values_but_normals(a, b)
+    }
+
+    /// [`CornerAttributes::same_values`], the normals left out.
+    fn same_values_but_normals(&self, a: usize, b: usize) -> bool {
+        same_bits(&self.uvs, a, b)
+            && same_bits(&self.uvs1, a, b)
+            && same_bits(&self.tangents, a, b)
+            && same_bits(&self.colors, a, b)
+            && same_bits(&self.weights, a, b)
             && self.joints.as_ref().is_none_or(|j| j[a] == j[b])
     }
 

@@ -116,21 +116,7 @@ fn values_of(mesh: &Mesh, f: u32, g: u32) -> Option<bool> {
     let normals = c.normals.as_ref()?;
     let bits = |n: [f32; 3]| n.map(f32::to_bits);
     let turned = |a: usize, b: usize| bits(normals[a].map(|x| -x)) == bits(normals[b]);
-    pairs.iter().all(|&(a, b)| turned(a, b) && same_but_normals(c, a, b)).then_some(true)
-}
-
-/// [`CornerAttributes::same`](crate::mesh::CornerAttributes::same) for every value but the normal.
-fn same_but_normals(c: &crate::mesh::CornerAttributes, a: usize, b: usize) -> bool {
-    fn same<const N: usize>(values: &Option<Vec<[f32; N]>>, a: usize, b: usize) -> bool {
-        values.as_ref().is_none_or(|v| v[a].map(f32::to_bits) == v[b].map(f32::to_bits))
-    }
-    same(&c.uvs, a, b)
-        && same(&c.uvs1, a, b)
-        && same(&c.tangents, a, b)
-        && same(&c.colors, a, b)
-        && same(&c.weights, a, b)
-        && c.joints.as_ref().is_none_or(|j| j[a] == j[b])
-        && c.materials.as_ref().is_none_or(|m| m[a] == m[b])
+    pairs.iter().all(|&(a, b)| turned(a, b) && c.same_but_normals(a, b)).then_some(true)
 }
 
 /// `mesh` without the `stacked` faces ([`State::stacked_faces`]), and what was set aside. The
