@@ -388,6 +388,19 @@ impl TryFrom<&proto::SimplifyOptions> for SimplifyOptions {
     }
 }
 
+/// The engine's refusals by rule, as the contract counts them.
+pub fn refusals_to_proto(r: &meshlod_engine::simplify::Refusals) -> proto::Refusals {
+    proto::Refusals {
+        link: r.link as u64,
+        too_few_faces: r.too_few_faces as u64,
+        normal_change: r.normal_change as u64,
+        needle: r.needle as u64,
+        fold: r.fold as u64,
+        seam: r.seam as u64,
+        uv_flip: r.uv_flip as u64,
+    }
+}
+
 /// The proto report of a Hausdorff measurement.
 pub fn hausdorff_to_proto(d: &meshlod_engine::hausdorff::HausdorffReport) -> proto::HausdorffReport {
     proto::HausdorffReport {

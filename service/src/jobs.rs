@@ -13,9 +13,7 @@ use std::sync::atomic::AtomicBool;
 use meshlod_engine::features::{SHAPE_FEATURE_NAMES, SHAPE_FEATURES, Shape, W_CLASSES, shape_features};
 use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
 use meshlod_engine::refine::{RefineMode, RefineOptions, Refined, refine as engine_refine};
-use meshlod_engine::simplify::{
-    Metric, NormalUpdate, Refusals, Simplified, SimplifyOptions, simplify as engine_simplify,
-};
+use meshlod_engine::simplify::{Metric, NormalUpdate, Simplified, SimplifyOptions, simplify as engine_simplify};
 use meshlod_engine::simplify::{prepare, simplify_search_w};
 use meshlod_engine::{Mesh, MeshError};
 use meshlod_predictor::Predictor;
@@ -148,7 +146,7 @@ pub fn simplify(
         parts_removed: s.parts_removed as u32,
         target_faces: s.target_faces as u32,
         rejected: s.rejected as u64,
-        refused: Some(refusals(&s.refused)),
+        refused: Some(convert::refusals_to_proto(&s.refused)),
         dropped_duplicate_faces: s.dropped_duplicate_faces as u32,
         back_faces: s.back_faces as u32,
         placement: format!("{:?}", result.stats.placement).to_lowercase(),
@@ -159,19 +157,6 @@ pub fn simplify(
         boundary: format!("{:?}", options.boundary).to_lowercase(),
     };
     Ok(Simplification { result, stats, hausdorff, encoded: None, progressive_lossless: o.progressive_lossless })
-}
-
-/// The engine's refusals by rule, as the contract counts them.
-fn refusals(r: &Refusals) -> proto::Refusals {
-    proto::Refusals {
-        link: r.link as u64,
-        too_few_faces: r.too_few_faces as u64,
-        normal_change: r.normal_change as u64,
-        needle: r.needle as u64,
-        fold: r.fold as u64,
-        seam: r.seam as u64,
-        uv_flip: r.uv_flip as u64,
-    }
 }
 
 /// The refiner's options from the contract's request (its `input` is not read): the mode

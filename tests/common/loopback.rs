@@ -3,6 +3,9 @@
 use std::net::SocketAddr;
 use std::time::Duration;
 
+use meshlod_engine::Mesh;
+use meshlod_service::convert::mesh_to_proto;
+use meshlod_service::proto;
 use meshlod_service::proto::mesh_lod_client::MeshLodClient;
 use meshlod_service::server::{ServerConfig, serve_with_listener};
 use tokio::sync::oneshot;
@@ -50,4 +53,18 @@ pub async fn channel(addr: SocketAddr) -> Channel {
         tokio::time::sleep(Duration::from_millis(20)).await;
     }
     panic!("server at {addr} did not come up");
+}
+
+/// `mesh` as a request's input.
+pub fn input(mesh: &Mesh) -> Option<proto::MeshInput> {
+    Some(proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(mesh_to_proto(mesh))) })
+}
+
+/// A Simplify request for `mesh` with `ratio`, the other options the contract's defaults.
+pub fn simplify_request(mesh: &Mesh, ratio: f64) -> proto::SimplifyRequest {
+    proto::SimplifyRequest {
+        input: input(mesh),
+        options: Some(proto::SimplifyOptions { target_ratio: Some(ratio), ..Default::default() }),
+        ..Default::default()
+    }
 }

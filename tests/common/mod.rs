@@ -98,3 +98,8 @@ pub fn scrape(metrics: std::net::SocketAddr) -> String {
 pub fn gauge(text: &str, name: &str) -> i64 {
     text.lines().find_map(|l| l.strip_prefix(&format!("{name} "))).unwrap().trim().parse().unwrap()
 }
+
+/// The requests a server is working on, from its metrics endpoint.
+pub fn in_flight(metrics: std::net::SocketAddr) -> i64 {
+    gauge(&scrape(metrics), "meshlod_in_flight")
+}

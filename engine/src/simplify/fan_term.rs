@@ -10,10 +10,10 @@ use super::kernel::State;
 /// The share of the input's faces a run removes before the fan-distance term is measured: the
 /// collapses before rank by their quadric error per unit of area alone. On a dense mesh those
 /// early collapses move the surface so little that the term changes little but their order, and
-/// measuring it costs a second queue pop and a fan walk per collapse. A share of the input rather than of the way to the
-/// target keeps the collapse order the same whatever the target, so that a progressive mesh's
-/// levels are the meshes a run straight to their face count gives. Measured beside
-/// meshoptimizer's and MeshLab's error over the shared meshes and the corpus, and beside
+/// measuring it costs a second queue pop and a fan walk per collapse. A share of the input rather
+/// than of the way to the target keeps the collapse order the same whatever the target, so that a
+/// progressive mesh's levels are the meshes a run straight to their face count gives. Measured
+/// beside meshoptimizer's and MeshLab's error over the shared meshes and the corpus, and beside
 /// meshoptimizer's time (docs/benchmarks.md).
 pub(super) const FAN_TERM_FROM: f64 = 0.7;
 

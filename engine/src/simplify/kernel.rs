@@ -61,9 +61,9 @@ pub(crate) struct State<'o> {
     pub(super) open_vertices: usize,
     /// The vertices the scan found frozen (non-manifold or inconsistently oriented neighbourhoods).
     pub(super) frozen_at_start: Vec<u32>,
-    /// Per face, whether a back face was set aside for it (`super::sheets`): it counts twice
-    /// towards the target. Empty when none was.
-    pub(super) backed: Vec<bool>,
+    /// Per face, the back set aside for it (`super::sheets`): a face with one counts twice
+    /// towards the target, and the output writes it again. Empty when none was.
+    pub(super) backs: Vec<super::sheets::Back>,
     /// Counts the calls of `is_legal`: a [`Legal`] token from the latest call (the one whose new
     /// face normals `fan_scratch` holds) carries the current count.
     pub(super) check_id: u32,
@@ -253,7 +253,7 @@ impl<'o> State<'o> {
             spoke: vec![0; vertex_count],
             open_vertices,
             frozen_at_start,
-            backed: Vec::new(),
+            backs: Vec::new(),
             check_id: 0,
             cos_max_normal_change: options.max_normal_change_degrees.to_radians().cos(),
             guard: None,

@@ -209,7 +209,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
         (std::borrow::Cow::Owned(sheet), set_aside)
     };
     // A face with a back set aside counts twice towards the target: the output has both.
-    state.backed = set_aside.backs.iter().map(|&b| b != sheets::Back::None).collect();
+    state.backs = set_aside.backs;
     let sheet_faces = prepared.face_count();
     let output_faces = sheet_faces + set_aside.twins;
     state.carry_attributes(&prepared);
@@ -230,7 +230,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
         || {
             let out = state.output_mesh();
             let live = (0..state.face_alive.len()).filter(|&f| state.face_alive[f]);
-            sheets::with_backs(out, live, &set_aside.backs)
+            sheets::with_backs(out, live, &state.backs)
         },
         || {
             options.record_progressive.then(|| {

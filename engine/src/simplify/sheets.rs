@@ -13,7 +13,7 @@ use crate::mesh::Mesh;
 use super::kernel::{NONE, State};
 
 /// The back set aside for a face of the one-sided mesh.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub(super) enum Back {
     #[default]
     None,
@@ -24,7 +24,7 @@ pub(super) enum Back {
 }
 
 /// A face stacked on an earlier one ([`State::stacked_faces`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) struct StackedFace {
     pub(super) face: u32,
     /// The face it stacks on.
@@ -49,12 +49,12 @@ impl State<'_> {
     /// it (none for [`NONE`]).
     #[inline]
     pub(super) fn output_faces(&self, f: u32) -> usize {
-        if f == NONE { 0 } else { 1 + self.backed.get(f as usize).is_some_and(|&b| b) as usize }
+        if f == NONE { 0 } else { 1 + self.backs.get(f as usize).is_some_and(|&b| b != Back::None) as usize }
     }
 
-    /// The faces of `mesh` (the state's) stacked on an earlier face with its values, in face
-    /// order. Such faces freeze their vertices, so only the fans of the vertices the scan found
-    /// frozen are looked at: a mesh without them costs nothing.
+    /// The faces of `mesh` (the state's) stacked on an earlier face with its values. Such faces
+    /// freeze their vertices, so only the fans of the vertices the scan found frozen are looked
+    /// at: a mesh without them costs nothing.
     pub(super) fn stacked_faces(&self, mesh: &Mesh) -> Vec<StackedFace> {
         let mut found = Vec::new();
         let mut at = Vec::new();
@@ -90,7 +90,6 @@ impl State<'_> {
                 }
             }
         }
-        found.sort_unstable();
         found
     }
 }
@@ -104,12 +103,10 @@ fn values_of(mesh: &Mesh, f: u32, g: u32) -> Option<bool> {
         return Some(false);
     }
     let (tf, tg) = (mesh.triangles[f as usize], mesh.triangles[g as usize]);
-    let pairs: Vec<(usize, usize)> = (0..3)
-        .map(|k| {
-            let j = tg.iter().position(|&x| x == tf[k]).expect("the same three vertices");
-            (3 * f as usize + k, 3 * g as usize + j)
-        })
-        .collect();
+    let pairs: [(usize, usize); 3] = std::array::from_fn(|k| {
+        let j = tg.iter().position(|&x| x == tf[k]).expect("the same three vertices");
+        (3 * f as usize + k, 3 * g as usize + j)
+    });
     if pairs.iter().all(|&(a, b)| c.same(a, b)) {
         return Some(false);
     }
