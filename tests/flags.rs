@@ -307,3 +307,44 @@ fn quantize_writes_khr_mesh_quantization_locally_and_through_the_client_and_only
     let text: Value = serde_json::from_slice(&std::fs::read(&converted).unwrap()).unwrap();
     assert_eq!(text["extensionsRequired"], quantization);
 }
+
+#[test]
+fn whole_runs_one_sequence_and_the_report_says_when_a_run_went_in_halves() {
+    let dir = tempdir("halves");
+    let input = dir.join("sphere.ply");
+    // 81 920 faces: large enough to go in halves.
+    ok(&["generate", "sphere", "-o", s(&input)]);
+    let out = dir.join("out.ply");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["simplify", s(&input), "-o", s(&out), "--ratio", "0.95", "--json"];
+        args.extend_from_slice(extra);
+        ok_json(&args)
+    };
+    let (halves, whole) = (run(&[]), run(&["--whole"]));
+    assert_eq!(halves["halves"], Value::Bool(true));
+    assert_eq!(whole["halves"], Value::Bool(false));
+    assert_eq!(halves["faces_out"], whole["faces_out"]);
+    let text = ok(&["simplify", s(&input), "-o", s(&out), "--ratio", "0.95"]);
+    assert!(String::from_utf8_lossy(&text.stdout).contains("in two halves first"));
+    // Over gRPC: SimplifyOptions.whole, and SimplifyStats.halves in the report.
+    let server = Server::start();
+    let client = |extra: &[&str]| {
+        let mut args = vec![
+            "client",
+            "--server",
+            server.address.as_str(),
+            "simplify",
+            s(&input),
+            "-o",
+            s(&out),
+            "--ratio",
+            "0.95",
+        ];
+        args.extend_from_slice(extra);
+        args.push("--json");
+        ok_json(&args)
+    };
+    assert_eq!(client(&[])["halves"], Value::Bool(true));
+    assert_eq!(client(&["--whole"])["halves"], Value::Bool(false));
+    assert_eq!(client(&[])["collapses"], halves["collapses"]);
+}

@@ -2,8 +2,9 @@
 //! says otherwise; progressive-mesh records on but in the lines "without progressive-mesh
 //! records", which is how `simplify` runs unless the progressive mesh is asked for) beside
 //! meshoptimizer at the same target face count, in one process, single-threaded but for the lines
-//! "on two threads" (meshlod called from a pool of two, where its setup's passes run side by side;
-//! meshoptimizer on one).
+//! "on two threads" (meshlod called from a pool of two, where its setup's passes and a large mesh's
+//! two halves run side by side; meshoptimizer on one). The lines "as one sequence" run meshlod
+//! with `halves` off (`--whole`): one sequence of collapses over the whole mesh.
 //! Prints one standard line per case:
 //! `input → output triangles, error, time, peer time, ratio`, plus throughput and peak memory.
 //!
@@ -43,6 +44,8 @@ enum Variant {
     /// The defaults without progressive-mesh records: `simplify` as a caller runs it unless it
     /// asks for the progressive mesh (`--pm`, gRPC `return_progressive`).
     NoRecords,
+    /// The defaults with `halves` off: one sequence over the whole mesh.
+    Whole,
 }
 
 fn case(name: &str, mesh: &Mesh, keep: f64, runs: usize, measure_error: bool, variant: Variant) {
@@ -59,6 +62,7 @@ fn case(name: &str, mesh: &Mesh, keep: f64, runs: usize, measure_error: bool, va
         Variant::Paper(w) => SimplifyOptions { metric: Metric::Qfvp { w }, distance_term: 0.0, ..defaults },
         Variant::Guard => SimplifyOptions { guard: 1.0, ..defaults },
         Variant::NoRecords => SimplifyOptions { record_progressive: false, ..defaults },
+        Variant::Whole => SimplifyOptions { halves: false, ..defaults },
     };
     // The other lines run on the calling thread, the global pool having one thread.
     let two = matches!(variant, Variant::TwoThreads)
@@ -114,7 +118,15 @@ fn main() {
                     case(&label, &mesh, keep, runs, false, Variant::NoRecords);
                 }
                 // Where the caller's pool has two threads (meshoptimizer still on one).
-                case(&format!("{name} keep 1% on two threads"), &mesh, 0.01, runs, false, Variant::TwoThreads);
+                for keep in [0.1, 0.01] {
+                    let label = format!("{name} keep {:.0}% on two threads", keep * 100.0);
+                    case(&label, &mesh, keep, runs, false, Variant::TwoThreads);
+                }
+                // One sequence over the whole mesh: what the halves change in time and error.
+                for keep in [0.1, 0.01] {
+                    let label = format!("{name} keep {:.0}% as one sequence", keep * 100.0);
+                    case(&label, &mesh, keep, runs, true, Variant::Whole);
+                }
                 // The paper's cost, at the default w and at the paper's w = 1: the fan-distance
                 // term's price and gain.
                 for w in [0.0, 1.0] {
@@ -137,7 +149,12 @@ fn main() {
         }
         None => ("procedural torus", procedural::torus(1414, 707, 0.3)),
     };
-    for (variant, records) in [(Variant::Default, ""), (Variant::NoRecords, " without progressive-mesh records")] {
+    for (variant, records) in [
+        (Variant::Default, ""),
+        (Variant::NoRecords, " without progressive-mesh records"),
+        (Variant::TwoThreads, " on two threads"),
+        (Variant::Whole, " as one sequence"),
+    ] {
         let name = format!("{label} ({} M) keep 1%{records}", big.face_count() as f64 / 1e6);
         case(&name, &big, 0.01, if quick { 1 } else { 2 }, false, variant);
     }

@@ -297,6 +297,12 @@ pub struct SimplifyArgs {
     /// most faces stays. Not with --pm (docs/attributes-report.md).
     #[arg(long, conflicts_with = "pm")]
     pub prune: bool,
+    /// One sequence of collapses over the whole mesh, never in halves: by default a mesh of 65 536
+    /// faces or more, simplified to an eighth of them or fewer, is first simplified in two halves
+    /// side by side (faster on two threads; docs/benchmarks.md), which a progressive mesh's levels
+    /// then follow only approximately.
+    #[arg(long)]
+    pub whole: bool,
     /// Largest change of a face normal one collapse may cause, in degrees (default 90).
     #[arg(long)]
     pub max_normal_change: Option<f64>,
@@ -370,6 +376,7 @@ impl SimplifyArgs {
             progressive_lossless: self.pm_lossless,
             attribute_weights: self.attribute_weights,
             prune: self.prune,
+            whole: self.whole,
         };
         SimplifyJob {
             input: self.input.clone(),

@@ -173,8 +173,9 @@ fn run_simplify(executor: &dyn Executor, args: &SimplifyArgs) -> Result<()> {
     let parts = counted("parts_removed", "part taken out", "parts taken out");
     let copies = counted("dropped_duplicate_faces", "duplicate face dropped", "duplicate faces dropped");
     let backs = counted("back_faces", "back face kept with its front", "back faces kept with their fronts");
+    let halves = if report.get("halves").and_then(Value::as_bool) == Some(true) { ", in two halves first" } else { "" };
     out!(
-        "{} → {} faces, {} → {} vertices ({}): {} collapses, {} refused{rules}, {} frozen vertices{holes}{parts}{copies}{backs}",
+        "{} → {} faces, {} → {} vertices ({}): {} collapses, {} refused{rules}, {} frozen vertices{holes}{parts}{copies}{backs}{halves}",
         text(&report, "faces_in"),
         text(&report, "faces_out"),
         text(&report, "vertices_in"),

@@ -383,6 +383,7 @@ impl TryFrom<&proto::SimplifyOptions> for SimplifyOptions {
                 meshlod_engine::simplify::AttributeWeights { uv: w.uv, normal: w.normal, color: w.color }
             }),
             prune: o.prune,
+            halves: !o.whole,
             cancel: None,
         })
     }

@@ -149,6 +149,7 @@ pub fn simplify(
         refused: Some(convert::refusals_to_proto(&s.refused)),
         dropped_duplicate_faces: s.dropped_duplicate_faces as u32,
         back_faces: s.back_faces as u32,
+        halves: s.halves,
         placement: format!("{:?}", result.stats.placement).to_lowercase(),
         normals: match options.normals {
             NormalUpdate::Linear => "linear".into(),

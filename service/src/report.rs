@@ -56,6 +56,7 @@ pub fn simplify(s: &proto::SimplifyStats, measured: Option<&proto::HausdorffRepo
         "refused": refused(s.refused.as_ref()),
         "dropped_duplicate_faces": s.dropped_duplicate_faces,
         "back_faces": s.back_faces,
+        "halves": s.halves,
         "frozen_vertices": s.frozen_vertices,
         "holes_closed": s.holes_closed,
         "parts_removed": s.parts_removed,

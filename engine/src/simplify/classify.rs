@@ -30,6 +30,9 @@ pub(crate) enum VertexKind {
     /// vertices and a locked border's. Assigned by the kernel, not by the scan; released when
     /// collapses leave its faces fewer sets of values ([`State::relax`]).
     Anchored,
+    /// Never moves, disappears or takes in a neighbour: a vertex of the band along the cut between
+    /// two halves of a large mesh while they are simplified apart (`super::halves`).
+    Locked,
 }
 
 /// [`prepare`], borrowing the mesh itself when there is nothing to drop (the usual input); the

@@ -77,6 +77,10 @@ pub(crate) struct State<'o> {
     /// ([`State::ranked_cost`]): with a distance term (the fan-distance term or the guard's), not
     /// with the paper's cost alone.
     pub(super) per_area: bool,
+    /// The face count whose share [`super::fan_term::FAN_TERM_FROM`] the run removes before the
+    /// fan-distance term is measured: the mesh's own, or the whole input's for the second stage of
+    /// a run in halves (`super::halves`).
+    pub(super) term_base: usize,
     /// Per-corner attributes carried through the collapses ([`State::carry_attributes`]): the
     /// input's values, and for each current corner (3 per face) the input corner whose values it
     /// has. Empty when the input has none (the collapse then pays nothing for them).
@@ -205,6 +209,19 @@ impl<'o> State<'o> {
     /// [`State::new`], keeping the triangle array current through the collapses or (without
     /// `track`) leaving it empty until [`State::rebuild_triangles`].
     pub(crate) fn with_tracking(mesh: &Mesh, options: &'o SimplifyOptions, track: bool) -> (State<'o>, Vec<[u32; 2]>) {
+        State::with_carried(mesh, options, track, None::<fn(usize, &mut VertexData)>)
+    }
+
+    /// [`State::with_tracking`], then `carry` given each vertex's block (its class, quadric and
+    /// unit normal from `mesh`, border planes included) to replace what an earlier run knows
+    /// better; the normal cones are then made again around the normals it leaves
+    /// (`super::halves`).
+    pub(super) fn with_carried(
+        mesh: &Mesh,
+        options: &'o SimplifyOptions,
+        track: bool,
+        carry: Option<impl Fn(usize, &mut VertexData)>,
+    ) -> (State<'o>, Vec<[u32; 2]>) {
         let vertex_count = mesh.vertex_count();
         // Two passes over the faces that need nothing of each other, side by side where the pool
         // has threads for them (`crate::parallel`): the fans and their scan (classes and edges),
@@ -265,6 +282,7 @@ impl<'o> State<'o> {
                 _ => options.distance_term,
             },
             per_area: false,
+            term_base: mesh.face_count(),
             attributes: CornerAttributes::default(),
             value_id: Vec::new(),
             corner_source: Vec::new(),
@@ -281,6 +299,17 @@ impl<'o> State<'o> {
         // perpendicular to its face: a border keeps its line.
         for &(a, b, f) in &boundary_edges {
             state.add_edge_plane(mesh, f as usize, a, b, BOUNDARY_WEIGHT);
+        }
+        if let Some(carry) = carry {
+            for (v, vertex) in state.vertices.iter_mut().enumerate() {
+                carry(v, vertex);
+                vertex.cone = NormalCone::EMPTY;
+            }
+            for (vertex, fan) in state.vertices.iter_mut().zip(&state.fans) {
+                for corner in fan {
+                    vertex.cone.widen(vertex.normal, face_units[corner.face as usize]);
+                }
+            }
         }
         (state, edges)
     }
@@ -679,50 +708,6 @@ impl<'o> State<'o> {
             self.journal_ends.push(self.journal.len() as u32);
         }
         record
-    }
-
-    /// Keeps the [`NormalCone`]s exact after `a` moved and took over faces: each face around `a`
-    /// widens the cones of its two other corners, and `a`'s own cone is rebuilt around its new
-    /// normal from these faces alone (they are all its faces). With `checked`, the new normals are
-    /// the ones [`State::is_legal`] just computed for this collapse (its scratch holds exactly the
-    /// faces of `a`'s new fan); otherwise they are computed here.
-    pub(super) fn update_cones(&mut self, a: u32, checked: bool) {
-        let axis = self.vertices[a as usize].normal;
-        let mut cone = NormalCone::EMPTY;
-        if checked {
-            debug_assert_eq!(self.fan_scratch.len(), self.fans[a as usize].len());
-            for &([x, y], n) in &self.fan_scratch {
-                cone.widen(axis, n);
-                for v in [x, y] {
-                    let vertex = &mut self.vertices[v as usize];
-                    vertex.cone.widen(vertex.normal, n);
-                }
-            }
-            self.vertices[a as usize].cone = cone;
-            return;
-        }
-        let p = self.point(a);
-        for i in 0..self.fans[a as usize].len() {
-            let Corner { next: x, prev: y, .. } = self.fans[a as usize][i];
-            let (px, py) = (self.point(x), self.point(y));
-            let cross = (px - p).cross(py - p);
-            let area2 = cross.length();
-            // `is_legal` refuses collapses that make a face this poor; a caller that skipped it
-            // gets cones that never rule a fold out, not wrong ones.
-            if area2 == 0.0 || triangle_quality(area2, p, px, py) < CONE_MIN_QUALITY {
-                cone = NormalCone::NEVER;
-                self.vertices[x as usize].cone = NormalCone::NEVER;
-                self.vertices[y as usize].cone = NormalCone::NEVER;
-                continue;
-            }
-            let n = cross / area2;
-            cone.widen(axis, n);
-            for v in [x, y] {
-                let vertex = &mut self.vertices[v as usize];
-                vertex.cone.widen(vertex.normal, n);
-            }
-        }
-        self.vertices[a as usize].cone = cone;
     }
 
     /// A fresh stamp for the scratch marks (every mark is older).

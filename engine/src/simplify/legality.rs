@@ -301,7 +301,7 @@ impl State<'_> {
     fn is_interior(&self, v: u32) -> bool {
         match self.vertices[v as usize].kind {
             VertexKind::Interior => true,
-            VertexKind::Boundary | VertexKind::Frozen => false,
+            VertexKind::Boundary | VertexKind::Frozen | VertexKind::Locked => false,
             VertexKind::Anchored => {
                 let fan = &self.fans[v as usize];
                 fan.iter().all(|c| fan.iter().any(|d| d.prev == c.next))
@@ -332,6 +332,52 @@ impl State<'_> {
             let n_across = (pn - px).cross(pp - px).normalize_or_zero();
             n_across.dot(n_new) < FOLD_DOT
         })
+    }
+}
+
+impl State<'_> {
+    /// Keeps the [`NormalCone`]s exact after `a` moved and took over faces: each face around `a`
+    /// widens the cones of its two other corners, and `a`'s own cone is rebuilt around its new
+    /// normal from these faces alone (they are all its faces). With `checked`, the new normals are
+    /// the ones [`State::is_legal`] just computed for this collapse (its scratch holds exactly the
+    /// faces of `a`'s new fan); otherwise they are computed here.
+    pub(super) fn update_cones(&mut self, a: u32, checked: bool) {
+        let axis = self.vertices[a as usize].normal;
+        let mut cone = NormalCone::EMPTY;
+        if checked {
+            debug_assert_eq!(self.fan_scratch.len(), self.fans[a as usize].len());
+            for &([x, y], n) in &self.fan_scratch {
+                cone.widen(axis, n);
+                for v in [x, y] {
+                    let vertex = &mut self.vertices[v as usize];
+                    vertex.cone.widen(vertex.normal, n);
+                }
+            }
+            self.vertices[a as usize].cone = cone;
+            return;
+        }
+        let p = self.point(a);
+        for i in 0..self.fans[a as usize].len() {
+            let Corner { next: x, prev: y, .. } = self.fans[a as usize][i];
+            let (px, py) = (self.point(x), self.point(y));
+            let cross = (px - p).cross(py - p);
+            let area2 = cross.length();
+            // `is_legal` refuses collapses that make a face this poor; a caller that skipped it
+            // gets cones that never rule a fold out, not wrong ones.
+            if area2 == 0.0 || triangle_quality(area2, p, px, py) < CONE_MIN_QUALITY {
+                cone = NormalCone::NEVER;
+                self.vertices[x as usize].cone = NormalCone::NEVER;
+                self.vertices[y as usize].cone = NormalCone::NEVER;
+                continue;
+            }
+            let n = cross / area2;
+            cone.widen(axis, n);
+            for v in [x, y] {
+                let vertex = &mut self.vertices[v as usize];
+                vertex.cone.widen(vertex.normal, n);
+            }
+        }
+        self.vertices[a as usize].cone = cone;
     }
 }
 

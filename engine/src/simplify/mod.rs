@@ -137,6 +137,7 @@ mod classify;
 mod cost;
 mod fan_term;
 mod guard;
+mod halves;
 pub(crate) mod kernel;
 mod legality;
 mod options;
@@ -153,6 +154,7 @@ use std::time::Instant;
 pub(crate) use classify::VertexKind;
 pub use classify::prepare;
 pub(crate) use classify::prepare_with_attributes;
+pub use halves::HALVES_FROM_FACES;
 pub(crate) use kernel::State;
 pub use legality::{FOLD_DOT, MIN_TRIANGLE_QUALITY};
 pub use options::{
@@ -194,6 +196,34 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     } else {
         options
     };
+    // A large mesh goes in halves first, where its options allow (`halves`).
+    if halves::applies(&prepared, options, target)
+        && let Some(out) = halves::simplify(&prepared, &input_vertex, options, &units, target)?
+    {
+        let stats = SimplifyStats {
+            faces_in,
+            faces_out: out.mesh.face_count(),
+            vertices_in: prepared.vertex_count(),
+            vertices_out: out.mesh.vertex_count(),
+            target_faces: target,
+            placement: options.placement,
+            collapses: out.collapses,
+            stop_reason: out.stop_reason,
+            max_collapse_error: out.max_collapse_error,
+            rejected: out.refused.total(),
+            refused: out.refused,
+            frozen_vertices: out.frozen_vertices,
+            holes_closed: out.holes_closed,
+            parts_removed: 0,
+            dropped_degenerate_faces: dropped,
+            dropped_duplicate_faces: 0,
+            back_faces: 0,
+            halves: true,
+            distance_term: out.distance_term,
+            seconds: started.elapsed().as_secs_f64(),
+        };
+        return Ok(Simplified { mesh: out.mesh, progressive: out.progressive, stats });
+    }
     // 2–3. Classification and working state. Melax's cost reads face normals through the triangle
     // array; the quadric costs never do, so the array is rebuilt once at the end instead.
     let track = options.metric == Metric::Melax;
@@ -272,6 +302,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
         dropped_degenerate_faces: dropped,
         dropped_duplicate_faces: set_aside.copies,
         back_faces: set_aside.twins,
+        halves: false,
         distance_term: state.fan_term,
         seconds: started.elapsed().as_secs_f64(),
     };

@@ -173,6 +173,15 @@ pub struct SimplifyOptions {
     /// keeps at least its smallest manifold form; not with `record_progressive` (a vertex split
     /// cannot bring back a part its base mesh lacks). Measured in docs/attributes-report.md.
     pub prune: bool,
+    /// Simplify a large mesh in two halves side by side first (on by default): a mesh of
+    /// [`HALVES_FROM_FACES`](super::HALVES_FROM_FACES) faces or more, simplified to an eighth of them
+    /// or fewer with the quadric costs alone (no guard, Melax, pruning, error limit or per-corner
+    /// attributes), is cut in two at the median of its faces; each half is simplified apart (on
+    /// its own thread where the pool has two) with the band along the cut left alone, to twice the
+    /// target, then the rest as a whole (`halves` module: what it keeps of a single run's order).
+    /// Off, one sequence runs over the whole mesh, whose progressive mesh then has every level
+    /// equal to the mesh a straight run to its face count gives. Measured in docs/benchmarks.md.
+    pub halves: bool,
     /// Set to `true` by another thread to stop the work; the call then returns
     /// [`MeshError::Cancelled`].
     pub cancel: Option<Arc<AtomicBool>>,
@@ -197,6 +206,7 @@ impl Default for SimplifyOptions {
             lock_seams: false,
             attribute_weights: AttributeWeights::default(),
             prune: false,
+            halves: true,
             cancel: None,
         }
     }
@@ -270,6 +280,8 @@ pub struct SimplifyStats {
     /// simplified with the face they back, as one sheet, and written again, reversed, beside each
     /// output face whose input face had one. The progressive mesh holds the one sheet.
     pub back_faces: usize,
+    /// Whether the run went in two halves first ([`SimplifyOptions::halves`]).
+    pub halves: bool,
     /// The fan-distance term's weight that applied: 0 where it was off or did not apply (Melax,
     /// the distance guard on, texture coordinates carried). It is measured once 70% of the input's
     /// faces are gone, so a run that stops before that never pays it.
@@ -410,6 +422,17 @@ pub struct Refusals {
 }
 
 impl Refusals {
+    /// Adds `other`'s counts, rule by rule.
+    pub(crate) fn add(&mut self, other: &Refusals) {
+        self.link += other.link;
+        self.too_few_faces += other.too_few_faces;
+        self.normal_change += other.normal_change;
+        self.needle += other.needle;
+        self.fold += other.fold;
+        self.seam += other.seam;
+        self.uv_flip += other.uv_flip;
+    }
+
     /// Counts one refusal under its rule.
     pub(crate) fn count(&mut self, refusal: Refusal) {
         *match refusal {

@@ -42,6 +42,7 @@ impl State<'_> {
         // Which endpoints may survive, and whether the survivor may move.
         let (may_keep_a, may_keep_b, may_move) = match (ka, kb) {
             _ if stays(ka) && stays(kb) => return None,
+            (VertexKind::Locked, _) | (_, VertexKind::Locked) => return None,
             // A boundary vertex goes into an anchor only along its boundary.
             (_, VertexKind::Boundary) | (VertexKind::Boundary, _)
                 if (stays(ka) || stays(kb)) && self.edge_corners(a, b).1 != 1 =>

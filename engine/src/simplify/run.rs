@@ -121,7 +121,7 @@ pub(super) fn run(
     let term_from = if state.guard.is_some() {
         live
     } else {
-        (live as f64 * (1.0 - super::fan_term::FAN_TERM_FROM)).round() as usize
+        (state.term_base as f64 * (1.0 - super::fan_term::FAN_TERM_FROM)).round() as usize
     };
     let stop_reason = loop {
         // Parts as small as the error reached so far go whole, while the target allows.

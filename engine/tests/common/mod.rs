@@ -3,6 +3,8 @@
 
 use std::path::Path;
 
+pub mod invariants;
+
 use meshlod_engine::io::{MeshFormat, ReadLimits, read_mesh_bytes};
 use meshlod_engine::{Mesh, MeshError};
 
