@@ -28,9 +28,10 @@
 
 use glam::DVec3;
 
+use super::Outcome;
 use super::classify::VertexKind;
 use super::kernel::{NONE, State};
-use super::options::{Metric, Refusals, SimplifyOptions, StopReason};
+use super::options::{Metric, SimplifyOptions};
 use super::run::{self, Run};
 use crate::error::MeshError;
 use crate::mesh::{DistanceUnits, Mesh};
@@ -45,19 +46,6 @@ pub const HALVES_FROM_FACES: usize = 1 << 16;
 /// the 14 shared and corpus meshes large enough for halves (docs/meshlab-comparison.md's runs),
 /// the error's geo-mean against one sequence was 1.054 at 1, 1.010 at 2 and 1.043 at 4.
 const FIRST_STAGE_TARGET: usize = 2;
-
-/// What a run in halves made, as [`super::simplify`] reports it.
-pub(super) struct Outcome {
-    pub(super) mesh: Mesh,
-    pub(super) progressive: Option<ProgressiveMesh>,
-    pub(super) collapses: usize,
-    pub(super) holes_closed: usize,
-    pub(super) stop_reason: StopReason,
-    pub(super) max_collapse_error: f64,
-    pub(super) refused: Refusals,
-    pub(super) frozen_vertices: usize,
-    pub(super) distance_term: f64,
-}
 
 /// Whether a run of `prepared` to `target` faces goes in halves: large enough, to an eighth of
 /// its faces or fewer (each half then does at least half of its collapses in the first stage),
@@ -136,17 +124,12 @@ fn cut(mesh: &Mesh) -> ([Half; 2], Vec<bool>) {
     ([half(0), half(1)], on_cut)
 }
 
-/// A half simplified with its band locked, to `target` faces; `None` where it has faces stacked on
-/// another (`super::sheets`), which the run over the whole mesh sets aside instead.
-fn first_stage<'o>(
-    half: &Half,
-    options: &'o SimplifyOptions,
-    units: &DistanceUnits,
-    target: usize,
-) -> Result<Option<(State<'o>, Run)>, MeshError> {
+/// A half's state with its band locked, and its edges off the band; `None` where it has faces
+/// stacked on another (`super::sheets`), which the run over the whole mesh sets aside instead.
+fn half_state<'o>(half: &Half, options: &'o SimplifyOptions) -> Option<(State<'o>, Vec<[u32; 2]>)> {
     let (mut state, edges) = State::with_tracking(&half.mesh, options, false);
     if !state.stacked_faces(&half.mesh).is_empty() {
-        return Ok(None);
+        return None;
     }
     for (vertex, &band) in state.vertices.iter_mut().zip(&half.band) {
         if band {
@@ -154,14 +137,25 @@ fn first_stage<'o>(
         }
     }
     let edges = edges.into_iter().filter(|e| !(half.band[e[0] as usize] || half.band[e[1] as usize])).collect();
-    let heap = run::initial_queue(&state, edges, half.mesh.face_count());
+    Some((state, edges))
+}
+
+/// The first stage of a half: its state (from [`half_state`]) simplified.
+fn first_stage(
+    half: &Half,
+    state: &mut State<'_>,
+    edges: Vec<[u32; 2]>,
+    units: &DistanceUnits,
+    target: usize,
+) -> Result<Run, MeshError> {
+    let heap = run::initial_queue(state, edges, half.mesh.face_count());
     // The faces with every corner on the band stay as they are; the others stop at twice the
     // target.
     let faces = half.mesh.face_count();
     let fixed = half.mesh.triangles.iter().filter(|t| t.iter().all(|&v| half.band[v as usize])).count();
-    let run = run::run(&mut state, heap, None, units, faces, (FIRST_STAGE_TARGET * target + fixed).min(faces))?;
+    let run = run::run(state, heap, None, units, faces, (FIRST_STAGE_TARGET * target + fixed).min(faces))?;
     state.rebuild_triangles(&half.mesh, &run.log);
-    Ok(Some((state, run)))
+    Ok(run)
 }
 
 /// A record of a half's (or the second stage's) run in the whole mesh's numbers.
@@ -190,12 +184,15 @@ pub(super) fn simplify(
     target: usize,
 ) -> Result<Option<Outcome>, MeshError> {
     let ([mut h0, mut h1], on_cut) = cut(prepared);
-    let (s0, s1) = crate::parallel::join(
-        prepared.face_count(),
-        || first_stage(&h0, options, units, target),
-        || first_stage(&h1, options, units, target),
+    let faces = prepared.face_count();
+    let (s0, s1) = crate::parallel::join(faces, || half_state(&h0, options), || half_state(&h1, options));
+    let (Some((mut st0, e0)), Some((mut st1, e1))) = (s0, s1) else { return Ok(None) };
+    let (run0, run1) = crate::parallel::join(
+        faces,
+        || first_stage(&h0, &mut st0, e0, units, target),
+        || first_stage(&h1, &mut st1, e1, units, target),
     );
-    let (Some((st0, run0)), Some((st1, run1))) = (s0?, s1?) else { return Ok(None) };
+    let (run0, run1) = (run0?, run1?);
     // (The halves' meshes and, once the rest's state is made, their states are done with: their
     // memory goes back before the second stage.)
     (h0.mesh, h1.mesh) = (Mesh::default(), Mesh::default());
@@ -300,9 +297,6 @@ pub(super) fn simplify(
             None,
         )
     });
-    let frozen_vertices = (state.vertices.iter().zip(&state.vertex_alive))
-        .filter(|&(v, &alive)| alive && matches!(v.kind, VertexKind::Frozen | VertexKind::Anchored))
-        .count();
     Ok(Some(Outcome {
         mesh,
         progressive,
@@ -311,7 +305,11 @@ pub(super) fn simplify(
         stop_reason: run2.stop_reason,
         max_collapse_error: first_error.max(run2.max_collapse_error),
         refused,
-        frozen_vertices,
+        frozen_vertices: state.frozen_vertices(),
+        parts_removed: 0,
+        dropped_duplicate_faces: 0,
+        back_faces: 0,
+        halves: true,
         distance_term: state.fan_term,
     }))
 }

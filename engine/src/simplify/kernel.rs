@@ -521,6 +521,13 @@ impl<'o> State<'o> {
         self.track_triangles = true;
     }
 
+    /// The live vertices that never move: frozen (non-manifold) ones and anchors.
+    pub(crate) fn frozen_vertices(&self) -> usize {
+        (self.vertices.iter().zip(&self.vertex_alive))
+            .filter(|&(v, &alive)| alive && matches!(v.kind, VertexKind::Frozen | VertexKind::Anchored))
+            .count()
+    }
+
     /// The surviving mesh: live vertices in input order, live faces in input order.
     pub(crate) fn output_mesh(&self) -> Mesh {
         let mut new_index = vec![NONE; self.vertices.len()];

@@ -196,34 +196,68 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     } else {
         options
     };
-    // A large mesh goes in halves first, where its options allow (`halves`).
-    if halves::applies(&prepared, options, target)
-        && let Some(out) = halves::simplify(&prepared, &input_vertex, options, &units, target)?
-    {
-        let stats = SimplifyStats {
-            faces_in,
-            faces_out: out.mesh.face_count(),
-            vertices_in: prepared.vertex_count(),
-            vertices_out: out.mesh.vertex_count(),
-            target_faces: target,
-            placement: options.placement,
-            collapses: out.collapses,
-            stop_reason: out.stop_reason,
-            max_collapse_error: out.max_collapse_error,
-            rejected: out.refused.total(),
-            refused: out.refused,
-            frozen_vertices: out.frozen_vertices,
-            holes_closed: out.holes_closed,
-            parts_removed: 0,
-            dropped_degenerate_faces: dropped,
-            dropped_duplicate_faces: 0,
-            back_faces: 0,
-            halves: true,
-            distance_term: out.distance_term,
-            seconds: started.elapsed().as_secs_f64(),
-        };
-        return Ok(Simplified { mesh: out.mesh, progressive: out.progressive, stats });
-    }
+    // A large mesh goes in halves first, where its options allow (`halves`); else (or where a
+    // half has stacked faces) one sequence over the whole mesh.
+    let halved = match halves::applies(&prepared, options, target) {
+        true => halves::simplify(&prepared, &input_vertex, options, &units, target)?,
+        false => None,
+    };
+    let out = match halved {
+        Some(out) => out,
+        None => one_sequence(&prepared, &input_vertex, options, &units, target)?,
+    };
+    let stats = SimplifyStats {
+        faces_in,
+        faces_out: out.mesh.face_count(),
+        vertices_in: prepared.vertex_count(),
+        vertices_out: out.mesh.vertex_count(),
+        target_faces: target,
+        placement: options.placement,
+        collapses: out.collapses,
+        stop_reason: out.stop_reason,
+        max_collapse_error: out.max_collapse_error,
+        rejected: out.refused.total(),
+        refused: out.refused,
+        frozen_vertices: out.frozen_vertices,
+        holes_closed: out.holes_closed,
+        parts_removed: out.parts_removed,
+        dropped_degenerate_faces: dropped,
+        dropped_duplicate_faces: out.dropped_duplicate_faces,
+        back_faces: out.back_faces,
+        halves: out.halves,
+        distance_term: out.distance_term,
+        seconds: started.elapsed().as_secs_f64(),
+    };
+    Ok(Simplified { mesh: out.mesh, progressive: out.progressive, stats })
+}
+
+/// What a run made, as [`simplify`] reports it.
+pub(super) struct Outcome {
+    pub(super) mesh: Mesh,
+    pub(super) progressive: Option<ProgressiveMesh>,
+    pub(super) collapses: usize,
+    pub(super) holes_closed: usize,
+    pub(super) stop_reason: StopReason,
+    pub(super) max_collapse_error: f64,
+    pub(super) refused: Refusals,
+    pub(super) frozen_vertices: usize,
+    pub(super) parts_removed: usize,
+    pub(super) dropped_duplicate_faces: usize,
+    pub(super) back_faces: usize,
+    pub(super) halves: bool,
+    pub(super) distance_term: f64,
+}
+
+/// Steps 2–6 of the module doc as one sequence of collapses over the whole of `prepared`.
+fn one_sequence(
+    prepared: &Mesh,
+    input_vertex: &[u32],
+    options: &SimplifyOptions,
+    units: &DistanceUnits,
+    target: usize,
+) -> Result<Outcome, MeshError> {
+    let faces_in = prepared.face_count();
+    let prepared = std::borrow::Cow::Borrowed(prepared);
     // 2–3. Classification and working state. Melax's cost reads face normals through the triangle
     // array; the quadric costs never do, so the array is rebuilt once at the end instead.
     let track = options.metric == Metric::Melax;
@@ -246,8 +280,8 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     // 4. Every edge queued.
     let heap = run::initial_queue(&state, edges, sheet_faces);
     // 5. The loop (with the parts it may take out whole, when asked to).
-    let parts = options.prune.then(|| prune::Parts::new(&prepared, &units)).flatten();
-    let mut run = run::run(&mut state, heap, parts, &units, output_faces, target)?;
+    let parts = options.prune.then(|| prune::Parts::new(&prepared, units)).flatten();
+    let mut run = run::run(&mut state, heap, parts, units, output_faces, target)?;
     let collapses = run.log.len();
     let holes_closed = run.log.iter().filter(|r| r.hole != crate::pm::NO_VERTEX).count();
     // 6. Outputs. The guard's tree and tables are done with: their memory goes back first.
@@ -266,7 +300,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
             options.record_progressive.then(|| {
                 ProgressiveMesh::from_log(
                     &prepared,
-                    &input_vertex,
+                    input_vertex,
                     |v| state.vertices[v as usize].position,
                     &state.triangles,
                     &state.face_alive,
@@ -281,30 +315,19 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
             })
         },
     );
-    let frozen_vertices = (state.vertices.iter().zip(&state.vertex_alive))
-        .filter(|&(v, &alive)| alive && matches!(v.kind, VertexKind::Frozen | VertexKind::Anchored))
-        .count();
-    let stats = SimplifyStats {
-        faces_in,
-        faces_out: simplified.face_count(),
-        vertices_in: prepared.vertex_count(),
-        vertices_out: simplified.vertex_count(),
-        target_faces: target,
-        placement: options.placement,
+    Ok(Outcome {
+        mesh: simplified,
+        progressive,
         collapses,
+        holes_closed,
         stop_reason: run.stop_reason,
         max_collapse_error: run.max_collapse_error,
-        rejected: run.refused.total(),
         refused: run.refused,
-        frozen_vertices,
-        holes_closed,
+        frozen_vertices: state.frozen_vertices(),
         parts_removed: run.parts_removed,
-        dropped_degenerate_faces: dropped,
         dropped_duplicate_faces: set_aside.copies,
         back_faces: set_aside.twins,
         halves: false,
         distance_term: state.fan_term,
-        seconds: started.elapsed().as_secs_f64(),
-    };
-    Ok(Simplified { mesh: simplified, progressive, stats })
+    })
 }
