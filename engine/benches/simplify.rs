@@ -96,8 +96,8 @@ fn case(name: &str, mesh: &Mesh, keep: f64, runs: usize, measure_error: bool, va
 }
 
 fn main() {
-    // Single-threaded, as the target says, but for the lines on two threads (Hausdorff uses rayon;
-    // keep it off the timed part).
+    // Single-threaded but for the lines on two threads, the pool a caller of the command line or
+    // the service gets on the 2-core machines (Hausdorff uses rayon; keep it off the timed part).
     rayon::ThreadPoolBuilder::new().num_threads(1).build_global().ok();
     let quick = std::env::var_os("MESHLOD_BENCH_QUICK").is_some();
     // Best of 15, interleaved: with 5, a line's ratio moved by up to ±15% between runs on the
