@@ -12,8 +12,8 @@
 //! a collapse has the same key and the same verdict in its half as in a run over the whole mesh;
 //! what differs is that the band's collapses wait for the second stage, and their neighbours meet
 //! other neighbours meanwhile, a difference that spreads as the surface coarsens (at 1% of a
-//! scan, about a third of the result's faces differ from one sequence's, at the same error on
-//! average: docs/benchmarks.md). Each half stops at [`FIRST_STAGE_TARGET`] times the run's target
+//! scan, 30–45% of the result's faces differ from one sequence's, at about the same error:
+//! docs/benchmarks.md). Each half stops at [`FIRST_STAGE_TARGET`] times the run's target
 //! (besides the band's faces): the whole run leaves at most the target on either side, so the
 //! first stage never goes further than it would. The fan-distance term starts in each half once
 //! 70% of the half's faces are gone. The second stage is one run over what is left, to the
@@ -22,9 +22,10 @@
 //! exactly), the term measured once 70% of the whole input's faces are gone.
 //!
 //! The result is the same on any number of threads (the cut depends on the mesh alone), and the
-//! progressive mesh is valid and restores the input exactly; its levels above the second stage's
-//! start interleave the halves' collapses by their error, so that a level of it is not the mesh a
-//! straight run to that face count gives, as it is with `halves` off.
+//! progressive mesh is valid and restores the input exactly (the halves' collapses interleaved by
+//! their error, then the second stage's); but its levels are not the meshes straight runs to their
+//! face counts give, as they are with `halves` off (each run stops its halves at twice its own
+//! target).
 
 use glam::DVec3;
 
