@@ -86,15 +86,14 @@ fn cut(mesh: &Mesh) -> ([Half; 2], Vec<bool>) {
     };
     let n = mesh.face_count();
     // Three times the centroid's coordinate, and the face's number to break ties.
-    let key = |f: usize| (mesh.triangles[f].iter().map(|&v| mesh.positions[v as usize][axis] as f64).sum::<f64>(), f);
-    let mut order: Vec<(f64, usize)> = (0..n).map(key).collect();
+    let keys: Vec<f64> =
+        mesh.triangles.iter().map(|t| t.iter().map(|&v| mesh.positions[v as usize][axis] as f64).sum()).collect();
+    let order = |f: usize, g: usize| keys[f].total_cmp(&keys[g]).then(f.cmp(&g));
+    let mut faces: Vec<usize> = (0..n).collect();
     let middle = n / 2;
-    order.select_nth_unstable_by(middle, |x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-    let pivot = order[middle];
-    drop(order);
-    let side: Vec<u8> = (0..n)
-        .map(|f| (key(f).0.total_cmp(&pivot.0).then(f.cmp(&pivot.1)) != std::cmp::Ordering::Less) as u8)
-        .collect();
+    let pivot = *faces.select_nth_unstable_by(middle, |&f, &g| order(f, g)).1;
+    drop(faces);
+    let side: Vec<u8> = (0..n).map(|f| (order(f, pivot) != std::cmp::Ordering::Less) as u8).collect();
     let mut sides = vec![0u8; mesh.vertex_count()];
     for (t, &s) in mesh.triangles.iter().zip(&side) {
         t.iter().for_each(|&v| sides[v as usize] |= 1 << s);

@@ -188,6 +188,22 @@ fn face_pass(mesh: &Mesh) -> (Vec<VertexData>, Vec<DVec3>) {
     (vertices, face_units)
 }
 
+/// Adds to `a` and `b` the constraint plane through edge (a, b) perpendicular to face `f`,
+/// weighted by `weight` times the edge's squared length (a border or a seam keeps its line).
+fn add_edge_plane(vertices: &mut [VertexData], mesh: &Mesh, f: usize, a: u32, b: u32, weight: f64) {
+    let [p0, p1, p2] = mesh.triangle_points(f);
+    let face_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+    let (pa, pb) = (mesh.point(a), mesh.point(b));
+    let edge = pb - pa;
+    let plane_normal = edge.cross(face_normal).normalize_or_zero();
+    if plane_normal == DVec3::ZERO {
+        return;
+    }
+    let q = Quadric::constraint(plane_normal, pa, weight * edge.length_squared());
+    vertices[a as usize].quadric += q;
+    vertices[b as usize].quadric += q;
+}
+
 #[inline]
 pub(super) fn to_f64(p: [f32; 3]) -> DVec3 {
     DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
@@ -214,8 +230,7 @@ impl<'o> State<'o> {
 
     /// [`State::with_tracking`], then `carry` given each vertex's block (its class, quadric and
     /// unit normal from `mesh`, border planes included) to replace what an earlier run knows
-    /// better; the normal cones are then made again around the normals it leaves
-    /// (`super::halves`).
+    /// better, before the normal cones are made around the normals it leaves (`super::halves`).
     pub(super) fn with_carried(
         mesh: &Mesh,
         options: &'o SimplifyOptions,
@@ -247,6 +262,14 @@ impl<'o> State<'o> {
                 kind => kind,
             };
             vertex.normal = vertex.normal.normalize_or_zero();
+        }
+        // The quadrics take, besides their faces' planes, a plane through each border edge and
+        // perpendicular to its face: a border keeps its line.
+        for &(a, b, f) in &boundary_edges {
+            add_edge_plane(&mut vertices, mesh, f as usize, a, b, BOUNDARY_WEIGHT);
+        }
+        if let Some(carry) = carry {
+            vertices.iter_mut().enumerate().for_each(|(v, vertex)| carry(v, vertex));
         }
         // Each vertex's normal cone takes in the unit normals of its faces (the cones need every
         // vertex normal first).
@@ -295,22 +318,6 @@ impl<'o> State<'o> {
             state.guard = DistanceGuard::new(mesh, &state.fans);
         }
         state.per_area = state.has_distance_term() && options.metric != Metric::Melax;
-        // The quadrics take, besides their faces' planes, a plane through each border edge and
-        // perpendicular to its face: a border keeps its line.
-        for &(a, b, f) in &boundary_edges {
-            state.add_edge_plane(mesh, f as usize, a, b, BOUNDARY_WEIGHT);
-        }
-        if let Some(carry) = carry {
-            for (v, vertex) in state.vertices.iter_mut().enumerate() {
-                carry(v, vertex);
-                vertex.cone = NormalCone::EMPTY;
-            }
-            for (vertex, fan) in state.vertices.iter_mut().zip(&state.fans) {
-                for corner in fan {
-                    vertex.cone.widen(vertex.normal, face_units[corner.face as usize]);
-                }
-            }
-        }
         (state, edges)
     }
 
@@ -407,25 +414,9 @@ impl<'o> State<'o> {
                     // A spoke across which only other values (normals: a hard edge) change.
                     (Some(_), _) => continue,
                 };
-                self.add_edge_plane(mesh, f, a, b, weight);
+                add_edge_plane(&mut self.vertices, mesh, f, a, b, weight);
             }
         }
-    }
-
-    /// Adds to `a` and `b` the constraint plane through edge (a, b) perpendicular to face `f`,
-    /// weighted by `weight` times the edge's squared length (a border or a seam keeps its line).
-    fn add_edge_plane(&mut self, mesh: &Mesh, f: usize, a: u32, b: u32, weight: f64) {
-        let [p0, p1, p2] = mesh.triangle_points(f);
-        let face_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
-        let (pa, pb) = (mesh.point(a), mesh.point(b));
-        let edge = pb - pa;
-        let plane_normal = edge.cross(face_normal).normalize_or_zero();
-        if plane_normal == DVec3::ZERO {
-            return;
-        }
-        let q = Quadric::constraint(plane_normal, pa, weight * edge.length_squared());
-        self.vertices[a as usize].quadric += q;
-        self.vertices[b as usize].quadric += q;
     }
 
     /// Whether input corners `x` and `y`, of the same vertex, carry the same values.

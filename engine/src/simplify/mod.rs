@@ -198,9 +198,10 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     };
     // A large mesh goes in halves first, where its options allow (`halves`); else (or where a
     // half has stacked faces) one sequence over the whole mesh.
-    let halved = match halves::applies(&prepared, options, target) {
-        true => halves::simplify(&prepared, &input_vertex, options, &units, target)?,
-        false => None,
+    let halved = if halves::applies(&prepared, options, target) {
+        halves::simplify(&prepared, &input_vertex, options, &units, target)?
+    } else {
+        None
     };
     let out = match halved {
         Some(out) => out,
