@@ -11,9 +11,8 @@
 //! a face on the other side), and its vertices' quadrics sum the same faces in the same order. So
 //! a collapse has the same key and the same verdict in its half as in a run over the whole mesh;
 //! what differs is that the band's collapses wait for the second stage, and their neighbours meet
-//! other neighbours meanwhile, a difference that spreads as the surface coarsens (at 1% of a
-//! scan, 30–45% of the result's faces differ from one sequence's, at about the same error:
-//! docs/benchmarks.md). Each half stops at [`FIRST_STAGE_TARGET`] times the run's target
+//! other neighbours meanwhile, a difference that spreads as the surface coarsens (how much, and
+//! at what error, in docs/benchmarks.md). Each half stops at [`FIRST_STAGE_TARGET`] times the run's target
 //! (besides the band's faces): the whole run leaves at most the target on either side, so the
 //! first stage never goes further than it would. The fan-distance term starts in each half once
 //! 70% of the half's faces are gone. The second stage is one run over what is left, to the
@@ -43,9 +42,9 @@ use crate::pm::{CollapseRecord, NO_VERTEX, ProgressiveMesh};
 pub const HALVES_FROM_FACES: usize = 1 << 16;
 
 /// Each half stops at this many times the whole run's target (besides the band's faces), so that
-/// the second stage has room to lay the band's faces out with their neighbours'. Over the cells of
-/// the 14 shared and corpus meshes large enough for halves (docs/meshlab-comparison.md's runs),
-/// the error's geo-mean against one sequence was 1.054 at 1, 1.010 at 2 and 1.043 at 4.
+/// the second stage has room to lay the band's faces out with their neighbours'. Chosen over once
+/// and four times by the error against one sequence on the shared and corpus meshes large enough
+/// for halves (docs/benchmarks.md).
 const FIRST_STAGE_TARGET: usize = 2;
 
 /// Whether a run of `prepared` to `target` faces goes in halves: large enough, to an eighth of
