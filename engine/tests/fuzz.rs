@@ -1,7 +1,9 @@
 //! Mutation fuzzing on stable Rust, deterministic and bounded: the OBJ, PLY, STL, OFF, glTF and `.pm` readers on
 //! mutations of the committed seed corpus (`tests/fuzz-corpus/`), and the simplify → progressive
-//! mesh → level pipeline on arbitrary small meshes. Every input must end in a value or a clear
-//! error: no panic, and every mesh that comes back passes its own check.
+//! mesh → level pipeline on arbitrary small meshes, and the glTF reader on seed documents whose
+//! fields are set to wrong values. Every input must end in a value or a clear error: no panic
+//! (not even one caught inside the code under test), and every mesh that comes back passes its
+//! own check.
 //!
 //! The count of inputs per target is `MESHLOD_FUZZ_ITERATIONS` (default 20 000, a few seconds
 //! in a debug build; the longer run documented in docs/reliability.md uses 200 000) and the seed
@@ -140,10 +142,40 @@ fn mutate(seed: &[u8], rng: &mut SplitMix64) -> Vec<u8> {
     out
 }
 
-/// Runs `f` and fails the test, with what it needs to replay, if it panics.
+std::thread_local! {
+    /// The message of the last panic on this thread, caught or not ([`caught_panic`]).
+    static PANICKED: std::cell::RefCell<Option<String>> = const { std::cell::RefCell::new(None) };
+}
+
+/// The message of a panic on this thread since the last call, even one that a `catch_unwind`
+/// inside the code under test turned into an error (the glTF reader guards the `gltf` crate so):
+/// the readers' own checks must refuse every input, not the safety net.
+fn caught_panic() -> Option<String> {
+    static HOOK: std::sync::Once = std::sync::Once::new();
+    HOOK.call_once(|| {
+        let default_hook = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            PANICKED.with(|p| *p.borrow_mut() = Some(info.to_string()));
+            default_hook(info);
+        }));
+    });
+    PANICKED.with(|p| p.borrow_mut().take())
+}
+
+/// Runs `f` and fails the test, with what it needs to replay, if it panics, or if a panic inside
+/// it was caught there.
 fn no_panic<T>(what: &str, seed: u64, case: u64, input: &[u8], f: impl FnOnce() -> T) -> T {
+    caught_panic();
     match catch_unwind(AssertUnwindSafe(f)) {
-        Ok(v) => v,
+        Ok(v) => {
+            if let Some(message) = caught_panic() {
+                panic!(
+                    "{what}: a panic, caught inside, at MESHLOD_FUZZ_SEED={seed}, case {case}: {message}; input: {:?}",
+                    String::from_utf8_lossy(&input[..input.len().min(2000)])
+                );
+            }
+            v
+        }
         Err(_) => panic!(
             "{what}: panic at MESHLOD_FUZZ_SEED={seed}, case {case}; input ({} bytes): {:?}",
             input.len(),
@@ -203,6 +235,105 @@ fn readers_survive_mutated_files() {
         }
     }
     eprintln!("fuzz readers: seed {seed}, {iterations} inputs: {parsed} parsed, {refused} refused");
+    assert!(parsed > 0 && refused > 0, "the mutations reach both outcomes ({parsed} parsed, {refused} refused)");
+}
+
+/// The JSON values a glTF document's fields are set to: indices in and out of range, counts,
+/// the component type codes (valid and not), wrong kinds.
+const GLTF_VALUES: [&str; 22] = [
+    "0",
+    "1",
+    "2",
+    "3",
+    "-1",
+    "7",
+    "255",
+    "256",
+    "65535",
+    "65536",
+    "4294967295",
+    "4294967296",
+    "1e300",
+    "0.5",
+    "5120",
+    "5121",
+    "5122",
+    "5125",
+    "5126",
+    "null",
+    "\"VEC2\"",
+    "[]",
+];
+
+/// Paths (keys and positions) to every value of `value` except the buffers' data.
+fn json_paths(value: &serde_json::Value, at: &mut Vec<serde_json::Value>, out: &mut Vec<Vec<serde_json::Value>>) {
+    let children: Vec<(serde_json::Value, &serde_json::Value)> = match value {
+        serde_json::Value::Object(map) => {
+            map.iter().filter(|(k, _)| k.as_str() != "uri").map(|(k, v)| (k.as_str().into(), v)).collect()
+        }
+        serde_json::Value::Array(items) => items.iter().enumerate().map(|(i, v)| (i.into(), v)).collect(),
+        _ => Vec::new(),
+    };
+    for (key, child) in children {
+        at.push(key);
+        out.push(at.clone());
+        json_paths(child, at, out);
+        at.pop();
+    }
+}
+
+/// The value at `path` in `value`, to be replaced or taken out.
+fn json_at<'a>(value: &'a mut serde_json::Value, path: &[serde_json::Value]) -> Option<&'a mut serde_json::Value> {
+    path.iter().try_fold(value, |v, key| match key {
+        serde_json::Value::String(k) => v.get_mut(k.as_str()),
+        k => v.get_mut(k.as_u64()? as usize),
+    })
+}
+
+#[test]
+fn gltf_documents_with_wrong_fields_are_refused_without_a_panic() {
+    // Documents that parse as JSON but say wrong things (an accessor that does not exist, an
+    // index of a float type, a count that overruns): the byte mutations above rarely keep the
+    // JSON whole.
+    let seed = setting("MESHLOD_FUZZ_SEED", 1);
+    let iterations = setting("MESHLOD_FUZZ_ITERATIONS", 20_000) / 4;
+    let mut rng = SplitMix64::new(seed);
+    let documents: Vec<serde_json::Value> = corpus()
+        .into_iter()
+        .filter(|(p, _)| p.extension().is_some_and(|e| e == "gltf"))
+        .map(|(_, bytes)| serde_json::from_slice(&bytes).expect("a seed document is JSON"))
+        .collect();
+    assert!(documents.len() >= 3, "the seed corpus's glTF documents");
+    let (mut parsed, mut refused) = (0usize, 0usize);
+    for case in 0..iterations {
+        let mut document = documents[(rng.next_u64() as usize) % documents.len()].clone();
+        let mut paths = Vec::new();
+        json_paths(&document, &mut Vec::new(), &mut paths);
+        for _ in 0..1 + rng.next_u64() % 3 {
+            let path = &paths[(rng.next_u64() as usize) % paths.len()];
+            let Some(target) = json_at(&mut document, path) else { continue };
+            *target = match rng.next_u64() % 4 {
+                0 => serde_json::Value::Null,
+                1 => target.as_f64().map_or(serde_json::Value::Null, |x| (x + 1.0).into()),
+                _ => serde_json::from_str(GLTF_VALUES[(rng.next_u64() as usize) % GLTF_VALUES.len()]).unwrap(),
+            };
+        }
+        let input = serde_json::to_vec(&document).unwrap();
+        let result = no_panic("read glTF", seed, case, &input, || {
+            read_mesh_bytes(&input, Some(MeshFormat::Gltf), Path::new("fuzz.gltf"), &limits())
+        });
+        match result {
+            Ok(mesh) => {
+                assert!(mesh.check().is_ok(), "case {case}: a mesh that fails its own check");
+                parsed += 1;
+            }
+            Err(e) => {
+                assert!(e.to_string().contains("fuzz.gltf"), "case {case}: {e}");
+                refused += 1;
+            }
+        }
+    }
+    eprintln!("fuzz glTF fields: seed {seed}, {iterations} documents: {parsed} parsed, {refused} refused");
     assert!(parsed > 0 && refused > 0, "the mutations reach both outcomes ({parsed} parsed, {refused} refused)");
 }
 

@@ -350,10 +350,51 @@ fn hostile_gltf_is_refused_by_name() {
     assert!(e.contains("KHR_draco_mesh_compression"), "{e}");
     let e = err(doc(42, 3, "").replace(&uri, "outside.bin"));
     assert!(e.contains("cannot be read here"), "{e}");
+    // A primitive's references out of range: the element and the count named (the `gltf`
+    // crate's own validation would panic on the first).
     let e = err(doc(42, 3, "").replace(r#""POSITION":0"#, r#""POSITION":7"#));
-    assert!(e.contains("document"), "{e}");
+    assert!(
+        e.contains("mesh 0 primitive 0 attribute POSITION") && e.contains("accessor 7, but the document has 2"),
+        "{e}"
+    );
+    let e = err(doc(42, 3, "").replace(r#""indices":1"#, r#""indices":65536"#));
+    assert!(e.contains("mesh 0 primitive 0 indices") && e.contains("accessor 65536"), "{e}");
+    let e = err(doc(42, 3, "").replace(r#""componentType":5123"#, r#""componentType":5120"#));
+    assert!(e.contains("indices (accessor 1) holds Scalar I8"), "{e}");
+    let e = err(doc(42, 3, "").replace(r#""type":"VEC3""#, r#""type":"VEC2""#));
+    assert!(e.contains("POSITION (accessor 0) holds Vec2 F32: glTF allows 3 floats"), "{e}");
+    let e = err(doc(42, 3, "").replace(r#""count":3,"type":"SCALAR""#, r#""count":0,"type":"SCALAR""#));
+    assert!(e.contains("accessor 1: has a count of 0"), "{e}");
+    let e = err(doc(42, 3, "").replace(r#""indices":1"#, r#""indices":1,"material":3"#));
+    assert!(e.contains("mesh 0 primitive 0") && e.contains("material 3, but the document has 0"), "{e}");
+    // A GLB header whose length does not cover the header, or runs past the file.
+    for declared in [5u32, 4000] {
+        let mut glb = b"glTF".to_vec();
+        glb.extend(2u32.to_le_bytes());
+        glb.extend(declared.to_le_bytes());
+        glb.extend([0u8; 8]);
+        let e = read_mesh_bytes(&glb, Some(MeshFormat::Gltf), Path::new("test.glb"), &ReadLimits::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("GLB container") && e.contains(&format!("declares {declared} bytes")), "{e}");
+    }
     let e = err("{\"asset\": ".into());
     assert!(e.contains("test.gltf"), "{e}");
+}
+
+/// A glTF buffer on a device is not read from it (`/dev/zero` would never end): `/dev/null`,
+/// which ends at once, tells the refusal from a read.
+#[cfg(unix)]
+#[test]
+fn a_buffer_on_a_device_is_refused_not_read() {
+    let dir = tempdir("device-references");
+    let doc = r#"{"asset":{"version":"2.0"},"buffers":[{"byteLength":42,"uri":"/dev/null"}],
+        "bufferViews":[{"buffer":0,"byteLength":36}],
+        "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[0,0,0]}],
+        "meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}]}"#;
+    std::fs::write(dir.join("null.gltf"), doc).unwrap();
+    let e = read_mesh(dir.join("null.gltf")).unwrap_err().to_string();
+    assert!(e.contains("buffer 0: '/dev/null': not a regular file"), "{e}");
 }
 
 #[test]

@@ -23,6 +23,7 @@ use glam::{DMat3, DMat4, DVec3};
 use gltf::mesh::Mode;
 
 use super::ReadLimits;
+use super::gltf_checks as checks;
 use crate::error::MeshError;
 use crate::mesh::{CornerAttributes, Image, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL, Rig};
 
@@ -72,6 +73,7 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
     // The extensions first, from the JSON alone (inside the GLB container for .glb), so that a
     // compressed file is refused by name rather than by whatever its data makes fail.
     let json: &[u8] = if bytes.starts_with(b"glTF") {
+        checks::glb_header(bytes).map_err(|reason| err("GLB container", reason))?;
         &gltf::Glb::from_slice(bytes).map_err(|e| err("GLB container", e.to_string()))?.json
     } else {
         bytes
@@ -82,8 +84,11 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
             return Err(err("document", format!("uses {name}, which meshlod does not decode: export without it")));
         }
     }
+    // The references of the meshes' primitives, which the crate's validation reads without
+    // checking them (an accessor index out of range there panics inside the crate): named here.
+    checks::primitive_references(&root).map_err(|(at, reason)| err(&at, reason))?;
     // The crate's validation (every index in the document refers to something that exists). It
-    // can panic on some out-of-range indices: that is reported as the invalid document it is.
+    // can panic on other out-of-range indices: that is reported as the invalid document it is.
     // KHR_mesh_quantization is read here (the crate refuses a document that requires it): taken
     // out of the document's lists before the crate validates the rest.
     let validated = |bytes: &[u8]| -> Result<gltf::Gltf, gltf::Error> {
@@ -119,7 +124,7 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
                         )
                     })?;
                     let file = folder.join(uri.replace("%20", " "));
-                    std::fs::read(&file).map_err(|e| err(&at, format!("'{}': {e}", file.display())))?
+                    super::read_referenced(&file).map_err(|e| err(&at, format!("'{}': {e}", file.display())))?
                 }
             }
         };
@@ -139,7 +144,7 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
         }
     }
     for accessor in document.accessors() {
-        check_accessor(&accessor).map_err(|reason| err(&format!("accessor {}", accessor.index()), reason))?;
+        checks::accessor(&accessor).map_err(|reason| err(&format!("accessor {}", accessor.index()), reason))?;
     }
     // Mesh instances with their world transforms and the node that draws them.
     let mut instances: Vec<(gltf::Mesh, DMat4, usize)> = Vec::new();
@@ -438,47 +443,6 @@ fn is_surface(mode: Mode) -> bool {
     matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan)
 }
 
-/// Checks that an accessor's elements (and its sparse parts) lie inside their buffer views.
-fn check_accessor(accessor: &gltf::Accessor) -> Result<(), String> {
-    let element = accessor.size();
-    let count = accessor.count();
-    if let Some(view) = accessor.view() {
-        let stride = view.stride().unwrap_or(element);
-        if stride < element {
-            return Err(format!("stride {stride} is shorter than its {element}-byte elements"));
-        }
-        if count > 0 {
-            let end = (count - 1)
-                .checked_mul(stride)
-                .and_then(|x| x.checked_add(accessor.offset()))
-                .and_then(|x| x.checked_add(element));
-            if end.is_none_or(|end| end > view.length()) {
-                return Err(format!(
-                    "{count} elements of {element} bytes (stride {stride}) overrun its bufferView of {} bytes",
-                    view.length()
-                ));
-            }
-        }
-    }
-    if let Some(sparse) = accessor.sparse() {
-        let n = sparse.count();
-        let index_size = match sparse.indices().index_type() {
-            gltf::accessor::sparse::IndexType::U8 => 1,
-            gltf::accessor::sparse::IndexType::U16 => 2,
-            gltf::accessor::sparse::IndexType::U32 => 4,
-        };
-        let indices_end = n.checked_mul(index_size).and_then(|x| x.checked_add(sparse.indices().offset()));
-        if indices_end.is_none_or(|end| end > sparse.indices().view().length()) {
-            return Err("its sparse indices overrun their bufferView".into());
-        }
-        let values_end = n.checked_mul(element).and_then(|x| x.checked_add(sparse.values().offset()));
-        if values_end.is_none_or(|end| end > sparse.values().view().length()) {
-            return Err("its sparse values overrun their bufferView".into());
-        }
-    }
-    Ok(())
-}
-
 /// Reads one primitive, placed by `world`; joints and weights when it has them and `joint_count`
 /// (the skin's joints) is not zero, every joint index checked against it.
 fn read_primitive(
@@ -487,6 +451,7 @@ fn read_primitive(
     world: &DMat4,
     joint_count: usize,
 ) -> Result<Part, String> {
+    checks::types(primitive)?;
     let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| d.as_slice()));
     let positions: Vec<[f32; 3]> = match quantized::<3>(primitive, &gltf::Semantic::Positions, buffers)? {
         Some(values) => values,
@@ -659,7 +624,7 @@ fn quantized<const N: usize>(
     };
     let count = accessor.count();
     let Some(view) = accessor.view() else { return Ok(Some(vec![[0.0; N]; count])) };
-    // In range: `check_accessor` checked every element against its view.
+    // In range: `gltf_checks::accessor` checked every element against its view.
     let stride = view.stride().unwrap_or(accessor.size());
     let data = &buffers[view.buffer().index()][view.offset()..view.offset() + view.length()];
     Ok(Some(

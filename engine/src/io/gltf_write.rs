@@ -437,7 +437,7 @@ fn add_library(
         }
         let bytes = match &image.source {
             ImageSource::Bytes(bytes) => Some(bytes.clone()),
-            ImageSource::File(path) => std::fs::read(path).ok(),
+            ImageSource::File(path) => super::read_referenced(path).ok(),
             ImageSource::Uri(_) => None,
         };
         let mime = bytes.as_deref().and_then(sniff_image).map(str::to_string).or_else(|| image.mime_type.clone());

@@ -6,6 +6,7 @@
 //! errors name the file and the line, byte or element at fault.
 
 mod gltf;
+mod gltf_checks;
 mod gltf_write;
 mod mtl;
 mod obj;
@@ -188,6 +189,15 @@ pub fn read_mesh_bytes(
     }
 }
 
+/// Reads a file that a mesh file refers to (a glTF buffer, a texture image): only a regular file,
+/// so that a reference to a device or a pipe (`/dev/zero`) is refused rather than read forever.
+pub(crate) fn read_referenced(path: &Path) -> std::io::Result<Vec<u8>> {
+    if !std::fs::metadata(path)?.is_file() {
+        return Err(std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a regular file"));
+    }
+    std::fs::read(path)
+}
+
 /// Reads a mesh file, choosing the format by extension and falling back to the content.
 pub fn read_mesh(path: impl AsRef<Path>) -> Result<Mesh, MeshError> {
     read_mesh_with_limits(path, &ReadLimits::default())
@@ -297,4 +307,18 @@ pub fn write_mesh_with(path: impl AsRef<Path>, mesh: &Mesh, options: &WriteOptio
         write_mesh_to(&mut writer, mesh, format).map_err(|e| io_error(path, e))?;
     }
     writer.flush().map_err(|e| io_error(path, e))
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    #[test]
+    fn a_referenced_file_is_read_only_when_regular() {
+        // A device is refused before any read (this one would never end).
+        let e = super::read_referenced(std::path::Path::new("/dev/zero")).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
+        let file = std::env::temp_dir().join(format!("meshlod-referenced-{}", std::process::id()));
+        std::fs::write(&file, b"bytes").unwrap();
+        assert_eq!(super::read_referenced(&file).unwrap(), b"bytes");
+        std::fs::remove_file(file).unwrap();
+    }
 }
