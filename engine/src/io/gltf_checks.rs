@@ -7,8 +7,8 @@
 /// the first that does not.
 pub(super) fn primitive_references(root: &gltf::json::Root) -> Result<(), (String, String)> {
     let accessors = root.accessors.len();
-    let accessor = |at: String, index: u32| {
-        if (index as usize) < accessors {
+    let accessor = |at: String, index: usize| {
+        if index < accessors {
             Ok(())
         } else {
             Err((at, format!("refers to accessor {index}, but the document has {accessors}")))
@@ -20,19 +20,19 @@ pub(super) fn primitive_references(root: &gltf::json::Root) -> Result<(), (Strin
             for (semantic, index) in &primitive.attributes {
                 let name = match semantic {
                     gltf::json::validation::Checked::Valid(s) => s.to_string(),
-                    gltf::json::validation::Checked::Invalid => "(unknown)".to_string(),
+                    gltf::json::validation::Checked::Invalid => "of an unknown name".to_string(),
                 };
-                accessor(format!("{at} attribute {name}"), index.value() as u32)?;
+                accessor(format!("{at} attribute {name}"), index.value())?;
             }
             if let Some(index) = &primitive.indices {
-                accessor(format!("{at} indices"), index.value() as u32)?;
+                accessor(format!("{at} indices"), index.value())?;
             }
             for (t, target) in primitive.targets.iter().flatten().enumerate() {
                 for (name, index) in
                     [("POSITION", &target.positions), ("NORMAL", &target.normals), ("TANGENT", &target.tangents)]
                 {
                     if let Some(index) = index {
-                        accessor(format!("{at} morph target {t} {name}"), index.value() as u32)?;
+                        accessor(format!("{at} morph target {t} {name}"), index.value())?;
                     }
                 }
             }
