@@ -382,6 +382,42 @@ fn hostile_gltf_is_refused_by_name() {
     assert!(e.contains("test.gltf"), "{e}");
 }
 
+#[test]
+fn sparse_accessors_substitute_values_and_bad_indices_are_refused() {
+    // Three positions, one replaced through a sparse accessor: [1, 0, 0] at `index` becomes [2, 0, 0].
+    let read = |indices: [u8; 2], count: usize| {
+        let mut bin = Vec::new();
+        for c in [0f32, 0., 0., 1., 0., 0., 0., 1., 0.] {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+        bin.extend_from_slice(&[indices[0], indices[1], 0, 0]);
+        for c in [2f32, 0., 0., 0., 1., 0.] {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+        use base64::Engine as _;
+        let uri = base64::engine::general_purpose::STANDARD.encode(&bin);
+        let json = format!(
+            r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{uri}"}}],
+            "bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":4}},{{"buffer":0,"byteOffset":40,"byteLength":24}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[2,1,0],
+                "sparse":{{"count":{count},"indices":{{"bufferView":1,"componentType":5121}},"values":{{"bufferView":2}}}}}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}]}}"#,
+            bin.len()
+        );
+        read_mesh_bytes(json.as_bytes(), Some(MeshFormat::Gltf), Path::new("sparse.gltf"), &ReadLimits::default())
+    };
+    let mesh = read([1, 0], 1).unwrap();
+    assert!(
+        mesh.positions.contains(&[2.0, 0.0, 0.0]) && !mesh.positions.contains(&[1.0, 0.0, 0.0]),
+        "{:?}",
+        mesh.positions
+    );
+    let e = read([7, 0], 1).unwrap_err().to_string();
+    assert!(e.contains("accessor 0: sparse index 0 is 7, but the accessor has 3 elements"), "{e}");
+    let e = read([2, 1], 2).unwrap_err().to_string();
+    assert!(e.contains("sparse index 1 (1) does not follow the one before in increasing order"), "{e}");
+}
+
 /// A glTF buffer on a device is not read from it (`/dev/zero` would never end): `/dev/null`,
 /// which ends at once, tells the refusal from a read.
 #[cfg(unix)]

@@ -144,7 +144,8 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
         }
     }
     for accessor in document.accessors() {
-        checks::accessor(&accessor).map_err(|reason| err(&format!("accessor {}", accessor.index()), reason))?;
+        checks::accessor(&accessor, &buffers)
+            .map_err(|reason| err(&format!("accessor {}", accessor.index()), reason))?;
     }
     // Mesh instances with their world transforms and the node that draws them.
     let mut instances: Vec<(gltf::Mesh, DMat4, usize)> = Vec::new();

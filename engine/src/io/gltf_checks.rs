@@ -48,8 +48,10 @@ pub(super) fn primitive_references(root: &gltf::json::Root) -> Result<(), (Strin
 }
 
 /// Checks that an accessor has elements (glTF requires one at least; the crate's reader counts
-/// back from the last) and that they (and its sparse parts) lie inside their buffer views.
-pub(super) fn accessor(accessor: &gltf::Accessor) -> Result<(), String> {
+/// back from the last) and that they (and its sparse parts) lie inside their buffer views, whose
+/// ranges in `buffers` are checked already; and that its sparse indices name its elements in
+/// increasing order, as glTF requires (the crate's reader skips one out of range unsaid).
+pub(super) fn accessor(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result<(), String> {
     let element = accessor.size();
     let count = accessor.count();
     if count == 0 {
@@ -85,6 +87,23 @@ pub(super) fn accessor(accessor: &gltf::Accessor) -> Result<(), String> {
         let values_end = n.checked_mul(element).and_then(|x| x.checked_add(sparse.values().offset()));
         if values_end.is_none_or(|end| end > sparse.values().view().length()) {
             return Err("its sparse values overrun their bufferView".into());
+        }
+        let view = sparse.indices().view();
+        let start = view.offset() + sparse.indices().offset();
+        let bytes = buffers
+            .get(view.buffer().index())
+            .and_then(|b| b.get(start..start + n * index_size))
+            .ok_or("its sparse indices lie outside their buffer")?;
+        let mut previous = None;
+        for (k, b) in bytes.chunks_exact(index_size).enumerate() {
+            let index = b.iter().rev().fold(0usize, |x, &byte| (x << 8) | usize::from(byte));
+            if index >= count {
+                return Err(format!("sparse index {k} is {index}, but the accessor has {count} elements"));
+            }
+            if previous.is_some_and(|p| index <= p) {
+                return Err(format!("sparse index {k} ({index}) does not follow the one before in increasing order"));
+            }
+            previous = Some(index);
         }
     }
     Ok(())
