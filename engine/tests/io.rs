@@ -490,3 +490,42 @@ fn quantized_gltf_is_read_as_floats() {
         .to_string();
     assert!(e.contains("NORMAL"), "{e}");
 }
+
+#[test]
+fn gltf_attribute_faults_name_the_primitive() {
+    // Positions (`vertices` of them) without indices, and TEXCOORD_0 with `uvs` values.
+    let read = |vertices: usize, uvs: &[[f32; 2]]| {
+        let mut bin = Vec::new();
+        for v in 0..vertices {
+            for c in [v as f32, (v % 2) as f32, 0.0] {
+                bin.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        uvs.iter().flatten().for_each(|c| bin.extend_from_slice(&c.to_le_bytes()));
+        use base64::Engine as _;
+        let uri = base64::engine::general_purpose::STANDARD.encode(&bin);
+        let json = format!(
+            r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{uri}"}}],
+            "bufferViews":[{{"buffer":0,"byteLength":{}}},{{"buffer":0,"byteOffset":{},"byteLength":{}}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":{vertices},"type":"VEC3","min":[0,0,0],"max":[{},1,0]}},
+                         {{"bufferView":1,"componentType":5126,"count":{},"type":"VEC2"}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1}}}}]}}]}}"#,
+            bin.len(),
+            12 * vertices,
+            12 * vertices,
+            8 * uvs.len(),
+            vertices - 1,
+            uvs.len()
+        );
+        read_mesh_bytes(json.as_bytes(), Some(MeshFormat::Gltf), Path::new("faults.gltf"), &ReadLimits::default())
+    };
+    // Without indices, each three vertices are a triangle, with their own texture coordinates.
+    let mesh = read(3, &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).unwrap();
+    assert_eq!((mesh.face_count(), mesh.corners.uvs.as_ref().unwrap()[1]), (1, [1.0, 0.0]));
+    let e = read(3, &[[0.0, 0.0], [1.0, 0.0]]).unwrap_err().to_string();
+    assert!(e.contains("mesh 0 primitive 0") && e.contains("TEXCOORD_0 has 2 values for 3 positions"), "{e}");
+    let e = read(3, &[[0.0, 0.0], [f32::NAN, 0.0], [0.0, 1.0]]).unwrap_err().to_string();
+    assert!(e.contains("mesh 0 primitive 0: TEXCOORD_0 of vertex 1 is not a finite number"), "{e}");
+    let e = read(4, &[[0.0, 0.0]; 4]).unwrap_err().to_string();
+    assert!(e.contains("mesh 0 primitive 0: 4 indices: not a whole number of triangles"), "{e}");
+}

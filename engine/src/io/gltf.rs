@@ -444,6 +444,15 @@ fn is_surface(mode: Mode) -> bool {
     matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan)
 }
 
+/// `Err` naming the first of `values` (an attribute `what`'s, per vertex) that is not a finite
+/// number.
+fn finite<const N: usize>(what: &str, values: &[[f32; N]]) -> Result<(), String> {
+    match values.iter().position(|v| v.iter().any(|c| !c.is_finite())) {
+        Some(vertex) => Err(format!("{what} of vertex {vertex} is not a finite number")),
+        None => Ok(()),
+    }
+}
+
 /// Reads one primitive, placed by `world`; joints and weights when it has them and `joint_count`
 /// (the skin's joints) is not zero, every joint index checked against it.
 fn read_primitive(
@@ -459,6 +468,7 @@ fn read_primitive(
         None => reader.read_positions().ok_or("POSITION cannot be read")?.collect(),
     };
     let n = positions.len();
+    finite("POSITION", &positions)?;
     let indices: Vec<u32> = match reader.read_indices() {
         Some(i) => i.into_u32().collect(),
         None => (0..n as u32).collect(),
@@ -494,18 +504,23 @@ fn read_primitive(
     let colors: Option<Vec<[f32; 4]>> = reader.read_colors(0).map(|r| r.into_rgba_f32().collect());
     if let Some(v) = &normals {
         same_count("NORMAL", v.len())?;
+        finite("NORMAL", v)?;
     }
     if let Some(v) = &uvs {
         same_count("TEXCOORD_0", v.len())?;
+        finite("TEXCOORD_0", v)?;
     }
     if let Some(v) = &uvs1 {
         same_count("TEXCOORD_1", v.len())?;
+        finite("TEXCOORD_1", v)?;
     }
     if let Some(v) = &tangents {
         same_count("TANGENT", v.len())?;
+        finite("TANGENT", v)?;
     }
     if let Some(v) = &colors {
         same_count("COLOR_0", v.len())?;
+        finite("COLOR_0", v)?;
     }
     let (mut joints, mut weights) = (None, None);
     if joint_count > 0 {
@@ -528,9 +543,7 @@ fn read_primitive(
             {
                 return Err(format!("JOINTS_0 of vertex {vertex} names joint {bad}; the skin has {joint_count}"));
             }
-            if let Some(vertex) = w.iter().position(|w| w.iter().any(|c| !c.is_finite())) {
-                return Err(format!("WEIGHTS_0 of vertex {vertex} is not a number"));
-            }
+            finite("WEIGHTS_0", w)?;
         } else {
             (joints, weights) = (None, None);
         }
