@@ -141,7 +141,8 @@ impl State<'_> {
 
     /// The queue key of edge {a, b} with its distance term added (the distance guard's when it is
     /// on, else the fan-distance term): never below the key [`State::entry`] gives it, which
-    /// leaves the term out; with the choice it was computed for.
+    /// leaves the term out; with the choice it was computed for. The attribute quadrics' part of
+    /// the choice's cost stays in the key.
     pub(super) fn guarded_key(&self, a: u32, b: u32) -> Option<(u32, Choice)> {
         let choice = self.choose(a, b)?;
         let (va, vb) = (&self.vertices[a as usize], &self.vertices[b as usize]);
@@ -152,7 +153,13 @@ impl State<'_> {
             Some(guard) => (self.options.guard, self.guard_distance2(guard, a, b, choice.position)),
             None => (self.fan_term, self.moved_fan_distance2(a, b, choice.position)),
         };
-        Some((order_key((self.ranked_cost(choice.error, area) + weight * d2) * factor, choice.error, length2), choice))
+        // The cost before the normal factor: the quadric error, plus the attribute quadrics' error
+        // where they are on (their cost is `(error + attributes) · factor`).
+        let cost = match self.wedges {
+            Some(_) if factor > 0.0 => choice.cost / factor,
+            _ => choice.error,
+        };
+        Some((order_key((self.ranked_cost(cost, area) + weight * d2) * factor, choice.error, length2), choice))
     }
 
     /// The squared distance the guard charges for collapsing {a, b} to `p`: the larger of the
@@ -226,5 +233,43 @@ impl State<'_> {
         guard.hint[a as usize] = guard.nearest_face(p, &[ha, hb], 0.0).1;
         guard.hint[b as usize] = NONE;
         self.guard = Some(guard);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::kernel::State;
+    use super::super::{AttributeWeights, SimplifyOptions};
+    use crate::procedural;
+
+    /// A distance term only adds to a key: the key a candidate gets at the top of the queue is
+    /// never below the one it was queued with, the attribute quadrics' part included (a blob with
+    /// normals that wander across it, no texture coordinates, so the fan-distance term applies).
+    #[test]
+    fn a_key_with_its_distance_term_keeps_the_attribute_quadrics() {
+        let mut mesh = procedural::bumpy_blob(12, 20, 4);
+        let normals = mesh.triangles.iter().flatten().map(|&v| {
+            let [x, y, z] = mesh.positions[v as usize];
+            let n = glam::Vec3::new(x + 0.4 * (5.0 * y).sin(), y, z + 0.4 * (4.0 * x).cos()).normalize();
+            n.to_array()
+        });
+        mesh.corners.normals = Some(normals.collect());
+        let weights = AttributeWeights { uv: 0.0, normal: 1.0, color: 0.0 };
+        for (name, options) in [
+            ("fan-distance term", SimplifyOptions { attribute_weights: weights, ..Default::default() }),
+            ("distance guard", SimplifyOptions { attribute_weights: weights, guard: 1.0, ..Default::default() }),
+        ] {
+            let (mut state, edges) = State::new(&mesh, &options);
+            state.carry_attributes(&mesh);
+            assert!(state.has_distance_term() && state.wedges.is_some(), "{name}");
+            let mut ranked = 0;
+            for [a, b] in edges {
+                let (Some(queued), Some((key, _))) = (state.entry(a, b), state.guarded_key(a, b)) else { continue };
+                let queued = (queued.rank() >> 32) as u32;
+                assert!(key >= queued, "{name}: edge {a}-{b}: key {key:#x} at the top, {queued:#x} queued");
+                ranked += 1;
+            }
+            assert!(ranked > 500, "{name}: {ranked} edges");
+        }
     }
 }
