@@ -1,37 +1,12 @@
 //! End-to-end tests of the `meshlod` command line: real processes, real files.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
+use std::path::Path;
+use std::process::Command;
+
+use common::{fails_with, meshlod, ok_json, s, tempdir};
 use serde_json::Value;
-
-fn meshlod(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_meshlod")).args(args).output().expect("meshlod runs")
-}
-
-fn ok_json(args: &[&str]) -> Value {
-    let out = meshlod(args);
-    assert!(out.status.success(), "{args:?} failed: {}", String::from_utf8_lossy(&out.stderr));
-    serde_json::from_slice(&out.stdout)
-        .unwrap_or_else(|e| panic!("{args:?}: bad JSON ({e}): {}", String::from_utf8_lossy(&out.stdout)))
-}
-
-fn fails_with(args: &[&str], needle: &str) {
-    let out = meshlod(args);
-    assert!(!out.status.success(), "{args:?} should fail");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stderr.contains(needle), "{args:?}: stderr '{stderr}' lacks '{needle}'");
-}
-
-fn tempdir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("meshlod-cli-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 #[test]
 fn a_reader_that_closes_the_pipe_early_ends_the_command_quietly() {
