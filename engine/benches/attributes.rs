@@ -9,7 +9,7 @@
 //! (paper units) for both; then the appearance error ([`meshlod_engine::appearance`]): texture-space
 //! distance to the input's values at the nearest input point on the same chart (and, beside it,
 //! of any chart), in texels of a 1024² texture, and normal deviation in degrees, over 20 000 points spread over each result by
-//! area. Times: one thread, interleaved, best of 15. Then the same count with the attribute
+//! area; and the faces whose texture-space triangle turns over against the input's. Times: one thread, interleaved, best of 15. Then the same count with the attribute
 //! quadrics and with `--prune`; last, meshlod's result written as GLB with floats and quantized
 //! (`--quantize`): bytes, and how far quantizing moved the surface.
 //!
@@ -144,8 +144,9 @@ fn main() {
         let cell = |x: Option<Spread>, pick: fn(&Spread) -> f64| {
             x.as_ref().map_or("–".to_string(), |s| format!("{:.2}", pick(s)))
         };
+        let count = |x: Option<usize>| x.map_or("–".to_string(), |n| n.to_string());
         appearance_rows.push(format!(
-            "| {} | {} / {} | {} / {} | {} / {} | {} / {} | {} / {} | {} / {} |",
+            "| {} | {} / {} | {} / {} | {} / {} | {} / {} | {} / {} | {} / {} | {} / {} |",
             name,
             cell(a_ours.uv_texels, |s| s.mean),
             cell(a_theirs.uv_texels, |s| s.mean),
@@ -159,6 +160,8 @@ fn main() {
             cell(a_theirs.normal_degrees, |s| s.mean),
             cell(a_ours.normal_degrees, |s| s.p95),
             cell(a_theirs.normal_degrees, |s| s.p95),
+            count(a_ours.uv_turned_over),
+            count(a_theirs.uv_turned_over),
         ));
         let error = |m: &Mesh| hausdorff(&mesh, m, &HausdorffOptions::default()).expect("measures").hausdorff;
         let (e_ours, e_theirs) = (error(&ours.mesh), error(&theirs));
@@ -217,8 +220,8 @@ fn main() {
         );
     }
     println!(
-        "\n| asset | uv mean, texels, same chart (meshlod / meshopt) | uv p95, same chart | uv mean, any chart | uv p95, any chart | normal mean, degrees | normal p95, degrees |\n\
-         |---|---:|---:|---:|---:|---:|---:|"
+        "\n| asset | uv mean, texels, same chart (meshlod / meshopt) | uv p95, same chart | uv mean, any chart | uv p95, any chart | normal mean, degrees | normal p95, degrees | texture triangles turned over |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|"
     );
     for row in appearance_rows {
         println!("{row}");

@@ -44,6 +44,10 @@ pub struct AppearanceError {
     pub uv_texels_any_chart: Option<Spread>,
     /// Angle between the normals, degrees (both meshes need normals).
     pub normal_degrees: Option<Spread>,
+    /// LOD faces whose texture-space triangle turns the other way than the input's at the nearest
+    /// point of the face's own chart (probed at the face's centroid): a texture drawn mirrored
+    /// there. Faces without a chart or without texture-space area are not counted.
+    pub uv_turned_over: Option<usize>,
 }
 
 fn spread(mut values: Vec<f64>) -> Option<Spread> {
@@ -162,12 +166,29 @@ pub fn appearance_error(
             normal_errors.push(best_normal);
         }
     }
+    let uv_turned_over = charts.as_ref().map(|charts| {
+        (0..lod.face_count())
+            .filter(|&f| {
+                let Some(own) = charts.of_face(lod, f) else { return false };
+                let centroid = lod.triangle_points(f).iter().sum::<DVec3>() / 3.0;
+                charts.nearest(&own, centroid).is_some_and(|(g, _)| uv_area(lod, f) * uv_area(input, g) < 0.0)
+            })
+            .count()
+    });
     Some(AppearanceError {
         samples,
         uv_texels: spread(uv_errors),
         uv_texels_any_chart: spread(uv_any_errors),
         normal_degrees: spread(normal_errors),
+        uv_turned_over,
     })
+}
+
+/// Twice the signed area of face `f`'s texture-space triangle (0 without texture coordinates).
+fn uv_area(mesh: &Mesh, f: usize) -> f64 {
+    let Some(uvs) = mesh.corners.uvs.as_ref() else { return 0.0 };
+    let [a, b, c] = [0, 1, 2].map(|k| DVec2::new(uvs[3 * f + k][0] as f64, uvs[3 * f + k][1] as f64));
+    (b - a).perp_dot(c - a)
 }
 
 /// The input's charts ([module docs](self)), each with its own tree for nearest-point queries.
@@ -273,21 +294,26 @@ impl Charts {
     /// The texture-space distance between `out` and the input's value at the point of `charts`
     /// nearest to `p` (the nearest chart's, when there are several).
     fn nearest_uv_distance(&self, input: &Mesh, charts: &[u32], p: DVec3, out: DVec2) -> f64 {
-        let mut best = (f64::INFINITY, f64::INFINITY);
+        let value = self.nearest(charts, p).and_then(|(g, b)| uv_at(input, g, b));
+        value.map_or(f64::INFINITY, |value| (out - value).length())
+    }
+
+    /// The input face of the point of `charts` nearest to `p` (the first chart's on a tie), with
+    /// that point's barycentric coordinates in it.
+    fn nearest(&self, charts: &[u32], p: DVec3) -> Option<(usize, [f64; 3])> {
+        let mut best: Option<(f64, usize, [f64; 3])> = None;
         for &c in charts {
             let Some((tree, faces)) = &self.trees[c as usize] else { continue };
             let nearest = tree.closest_point(p, None);
+            if best.is_some_and(|(d, ..)| nearest.distance() >= d) {
+                continue;
+            }
             let t = tree.slot_corners(nearest.slot);
-            let g = faces[tree.slot_face(nearest.slot) as usize];
             let q = closest_point_on_triangle(p, t[0], t[1], t[2]);
             let b = barycentric(q, t).unwrap_or([1.0, 0.0, 0.0]);
-            let Some(value) = uv_at(input, g, b) else { continue };
-            let candidate = (nearest.distance(), (out - value).length());
-            if candidate.0 < best.0 {
-                best = candidate;
-            }
+            best = Some((nearest.distance(), faces[tree.slot_face(nearest.slot) as usize], b));
         }
-        best.1
+        best.map(|(_, g, b)| (g, b))
     }
 }
 
@@ -329,6 +355,20 @@ mod tests {
         let expected_mean = 0.5 * 1024.0 * 0.7652; // mean distance from a corner of the unit square
         assert!((error.mean - expected_mean).abs() < 0.03 * expected_mean, "{error:?} vs {expected_mean}");
         assert!(error.max_sampled <= 0.5 * 1024.0 * 2f64.sqrt() + 1e-6);
+    }
+
+    #[test]
+    fn a_face_whose_texture_turns_over_is_counted() {
+        let a = square(1.0);
+        let same = appearance_error(&a, &a, 100, 1024.0, 1).unwrap();
+        assert_eq!(same.uv_turned_over, Some(0));
+        // The second face's last two corners swap their values: the same values, the other way round.
+        let mut b = a.clone();
+        b.corners.uvs.as_mut().unwrap().swap(4, 5);
+        assert_eq!(appearance_error(&a, &b, 100, 1024.0, 1).unwrap().uv_turned_over, Some(1));
+        // Without texture coordinates nothing is counted.
+        b.corners.uvs = None;
+        assert_eq!(appearance_error(&a, &b, 100, 1024.0, 1).unwrap().uv_turned_over, None);
     }
 
     #[test]
