@@ -279,6 +279,33 @@ fn textured_assets_come_out_as_gltf_with_their_attributes_and_textures() {
     }
 }
 
+/// The edges inside a texture chart (the same values on both sides) whose two faces' texture-space
+/// triangles turn opposite ways: where the map folds over itself.
+fn folded_edges(m: &Mesh) -> usize {
+    let Some(uv) = &m.corners.uvs else { return 0 };
+    let area = |f: usize| {
+        let [a, b, c] = [uv[3 * f], uv[3 * f + 1], uv[3 * f + 2]];
+        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    };
+    let mut first = std::collections::HashMap::new();
+    let mut folds = 0;
+    for (f, t) in m.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (x, y) = (t[k], t[(k + 1) % 3]);
+            let values = [uv[3 * f + k], uv[3 * f + (k + 1) % 3]].map(|v| v.map(f32::to_bits));
+            let (key, values) = if x < y { ((x, y), values) } else { ((y, x), [values[1], values[0]]) };
+            match first.get(&key) {
+                Some(&(g, other)) if other == values && area(f) * area(g) < 0.0 => folds += 1,
+                Some(_) => {}
+                None => {
+                    first.insert(key, (f, values));
+                }
+            }
+        }
+    }
+    folds
+}
+
 /// The border edges once every two vertices at the same position count as one (`clean`: faces
 /// that then repeat a vertex, or have no area, left out): where two sides of a cut have come
 /// apart, their edges are counted here.
@@ -341,6 +368,12 @@ fn simplification_keeps_the_textured_assets_attributes_and_seams() {
         let (before_uv, after_uv) = (flips(&mesh), flips(lod));
         if before_uv.0 == 0 || before_uv.1 == 0 {
             assert!(after_uv.0 == 0 || after_uv.1 == 0, "{}: uv orientation {before_uv:?} → {after_uv:?}", row["file"]);
+        }
+        // Nor against the input's own charts, where the map does not fold (mirrored charts
+        // allowed): no face's texture turns over against the nearest point of its chart.
+        if folded_edges(&mesh) == 0 {
+            let measured = meshlod_engine::appearance::appearance_error(&mesh, lod, 1, 1024.0, 1).unwrap();
+            assert_eq!(measured.uv_turned_over.unwrap_or(0), 0, "{}: a texture turned over", row["file"]);
         }
         // Seams stay seams: none opens into a border (borders may only get fewer, coarser edges).
         let after = meshlod_engine::validate::validate(lod);
