@@ -279,14 +279,17 @@ fn textured_assets_come_out_as_gltf_with_their_attributes_and_textures() {
     }
 }
 
+/// Twice the signed area of face `f`'s texture-space triangle (`uv`: the corners' values).
+fn uv_turn(uv: &[[f32; 2]], f: usize) -> f32 {
+    let [a, b, c] = [uv[3 * f], uv[3 * f + 1], uv[3 * f + 2]];
+    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+}
+
 /// The edges inside a texture chart (the same values on both sides) whose two faces' texture-space
 /// triangles turn opposite ways: where the map folds over itself.
 fn folded_edges(m: &Mesh) -> usize {
     let Some(uv) = &m.corners.uvs else { return 0 };
-    let area = |f: usize| {
-        let [a, b, c] = [uv[3 * f], uv[3 * f + 1], uv[3 * f + 2]];
-        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
-    };
+    let area = |f: usize| uv_turn(uv, f);
     let mut first = std::collections::HashMap::new();
     let mut folds = 0;
     for (f, t) in m.triangles.iter().enumerate() {
@@ -356,10 +359,7 @@ fn simplification_keeps_the_textured_assets_attributes_and_seams() {
         // Faces whose texture-space triangle turns counter-clockwise and clockwise.
         let flips = |m: &Mesh| -> (usize, usize) {
             let Some(uv) = &m.corners.uvs else { return (0, 0) };
-            let signed = |f: usize| {
-                let [a, b, c] = [uv[3 * f], uv[3 * f + 1], uv[3 * f + 2]];
-                (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
-            };
+            let signed = |f: usize| uv_turn(uv, f);
             let positive = (0..m.face_count()).filter(|&f| signed(f) > 0.0).count();
             let negative = (0..m.face_count()).filter(|&f| signed(f) < 0.0).count();
             (positive, negative)

@@ -10,6 +10,17 @@ use common::{assert_parse_error, obj, ply, tempdir};
 
 const SQUARE_OBJ: &str = "# square\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
 
+/// `bin` as a glTF buffer's data URI (base64, embedded).
+fn data_uri(bin: &[u8]) -> String {
+    use base64::Engine as _;
+    format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(bin))
+}
+
+/// A glTF document read as if from the file `name`.
+fn read_gltf(json: &str, name: &str) -> Result<meshlod_engine::Mesh, MeshError> {
+    read_mesh_bytes(json.as_bytes(), Some(MeshFormat::Gltf), Path::new(name), &ReadLimits::default())
+}
+
 #[test]
 fn obj_reads_polygons_negative_indices_and_corner_attributes() {
     let m = obj(SQUARE_OBJ).unwrap();
@@ -310,9 +321,7 @@ fn a_read_stops_when_cancelled() {
 
 #[test]
 fn hostile_gltf_is_refused_by_name() {
-    let gltf = |json: &str| {
-        read_mesh_bytes(json.as_bytes(), Some(MeshFormat::Gltf), Path::new("test.gltf"), &ReadLimits::default())
-    };
+    let gltf = |json: &str| read_gltf(json, "test.gltf");
     // One triangle: 3 positions (36 bytes) and 3 u16 indices (6 bytes), embedded as base64.
     let mut bin = Vec::new();
     for p in [[0f32, 0., 0.], [1., 0., 0.], [0., 1., 0.]] {
@@ -323,9 +332,7 @@ fn hostile_gltf_is_refused_by_name() {
     for i in [0u16, 1, 2] {
         bin.extend_from_slice(&i.to_le_bytes());
     }
-    use base64::Engine as _;
-    let uri =
-        format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
+    let uri = data_uri(&bin);
     let doc = |buffer_length: usize, count: usize, extra: &str| {
         format!(
             r#"{{"asset":{{"version":"2.0"}},{extra}"buffers":[{{"byteLength":{buffer_length},"uri":"{uri}"}}],
@@ -394,17 +401,16 @@ fn sparse_accessors_substitute_values_and_bad_indices_are_refused() {
         for c in [2f32, 0., 0., 0., 1., 0.] {
             bin.extend_from_slice(&c.to_le_bytes());
         }
-        use base64::Engine as _;
-        let uri = base64::engine::general_purpose::STANDARD.encode(&bin);
+        let uri = data_uri(&bin);
         let json = format!(
-            r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{uri}"}}],
+            r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":{},"uri":"{uri}"}}],
             "bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":4}},{{"buffer":0,"byteOffset":40,"byteLength":24}}],
             "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[2,1,0],
                 "sparse":{{"count":{count},"indices":{{"bufferView":1,"componentType":5121}},"values":{{"bufferView":2}}}}}}],
             "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}]}}"#,
             bin.len()
         );
-        read_mesh_bytes(json.as_bytes(), Some(MeshFormat::Gltf), Path::new("sparse.gltf"), &ReadLimits::default())
+        read_gltf(&json, "sparse.gltf")
     };
     let mesh = read([1, 0], 1).unwrap();
     assert!(
@@ -448,9 +454,7 @@ fn quantized_gltf_is_read_as_floats() {
     for uv in [[0u16, 0], [65535, 0], [0, 32768]] {
         uv.iter().for_each(|c| bin.extend_from_slice(&c.to_le_bytes()));
     }
-    use base64::Engine as _;
-    let uri =
-        format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin));
+    let uri = data_uri(&bin);
     let json = format!(
         r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_mesh_quantization"],"extensionsRequired":["KHR_mesh_quantization"],
         "scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0,"scale":[0.001,0.001,0.001]}}],
@@ -463,8 +467,7 @@ fn quantized_gltf_is_read_as_floats() {
         "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1,"TEXCOORD_0":2}}}}]}}]}}"#,
         bin.len()
     );
-    let mesh =
-        read_mesh_bytes(json.as_bytes(), Some(MeshFormat::Gltf), Path::new("q.gltf"), &ReadLimits::default()).unwrap();
+    let mesh = read_gltf(&json, "q.gltf").unwrap();
     assert_eq!(mesh.face_count(), 1);
     let close = |a: [f32; 3], b: [f32; 3]| a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-6);
     assert!(
@@ -485,9 +488,7 @@ fn quantized_gltf_is_read_as_floats() {
         r#""componentType":5120,"normalized":true,"count":3,"type":"VEC3""#,
         r#""componentType":5120,"normalized":true,"count":3,"type":"VEC2""#,
     );
-    let e = read_mesh_bytes(bad.as_bytes(), Some(MeshFormat::Gltf), Path::new("q.gltf"), &ReadLimits::default())
-        .unwrap_err()
-        .to_string();
+    let e = read_gltf(&bad, "q.gltf").unwrap_err().to_string();
     assert!(e.contains("NORMAL"), "{e}");
 }
 
@@ -502,10 +503,9 @@ fn gltf_attribute_faults_name_the_primitive() {
             }
         }
         uvs.iter().flatten().for_each(|c| bin.extend_from_slice(&c.to_le_bytes()));
-        use base64::Engine as _;
-        let uri = base64::engine::general_purpose::STANDARD.encode(&bin);
+        let uri = data_uri(&bin);
         let json = format!(
-            r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{uri}"}}],
+            r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":{},"uri":"{uri}"}}],
             "bufferViews":[{{"buffer":0,"byteLength":{}}},{{"buffer":0,"byteOffset":{},"byteLength":{}}}],
             "accessors":[{{"bufferView":0,"componentType":5126,"count":{vertices},"type":"VEC3","min":[0,0,0],"max":[{},1,0]}},
                          {{"bufferView":1,"componentType":5126,"count":{},"type":"VEC2"}}],
@@ -517,7 +517,7 @@ fn gltf_attribute_faults_name_the_primitive() {
             vertices - 1,
             uvs.len()
         );
-        read_mesh_bytes(json.as_bytes(), Some(MeshFormat::Gltf), Path::new("faults.gltf"), &ReadLimits::default())
+        read_gltf(&json, "faults.gltf")
     };
     // Without indices, each three vertices are a triangle, with their own texture coordinates.
     let mesh = read(3, &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).unwrap();

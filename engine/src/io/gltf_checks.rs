@@ -80,19 +80,19 @@ pub(super) fn accessor(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result
             gltf::accessor::sparse::IndexType::U16 => 2,
             gltf::accessor::sparse::IndexType::U32 => 4,
         };
-        let indices_end = n.checked_mul(index_size).and_then(|x| x.checked_add(sparse.indices().offset()));
-        if indices_end.is_none_or(|end| end > sparse.indices().view().length()) {
+        let indices_start = sparse.indices().offset();
+        let indices_end = n.checked_mul(index_size).and_then(|x| x.checked_add(indices_start));
+        let view = sparse.indices().view();
+        let Some(indices_end) = indices_end.filter(|&end| end <= view.length()) else {
             return Err("its sparse indices overrun their bufferView".into());
-        }
+        };
         let values_end = n.checked_mul(element).and_then(|x| x.checked_add(sparse.values().offset()));
         if values_end.is_none_or(|end| end > sparse.values().view().length()) {
             return Err("its sparse values overrun their bufferView".into());
         }
-        let view = sparse.indices().view();
-        let start = view.offset() + sparse.indices().offset();
         let bytes = buffers
             .get(view.buffer().index())
-            .and_then(|b| b.get(start..start + n * index_size))
+            .and_then(|b| b.get(view.offset() + indices_start..view.offset() + indices_end))
             .ok_or("its sparse indices lie outside their buffer")?;
         let mut previous = None;
         for (k, b) in bytes.chunks_exact(index_size).enumerate() {
