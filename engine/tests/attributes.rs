@@ -222,6 +222,60 @@ fn gltf_round_trips_values_materials_and_images() {
     assert!(err.contains("face 11 names material 2"), "{err}");
 }
 
+/// An OBJ written to a file gets its materials in an MTL file beside it, with their base-colour
+/// textures: an image held in memory or a file elsewhere is written beside it, a file already
+/// there is named as it is, and all of it reads back.
+#[test]
+fn obj_files_come_with_their_materials_and_textures() {
+    use meshlod_engine::mesh::{Image, ImageSource, MaterialLibrary};
+    use serde_json::json;
+    let (dir, elsewhere) = (tempdir("obj-materials"), tempdir("obj-materials-elsewhere"));
+    let png = b"\x89PNG\r\n\x1a\n held in memory".to_vec();
+    let jpeg = b"\xFF\xD8\xFF a file elsewhere".to_vec();
+    std::fs::write(elsewhere.join("wood grain.jpg"), &jpeg).unwrap();
+    let mut cube = textured_cube();
+    cube.corners.materials = Some((0..12u32).flat_map(|f| [f / 4; 3]).collect());
+    let library = MaterialLibrary {
+        materials: vec![
+            json!({ "name": "painted", "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }),
+            json!({ "name": "wood", "pbrMetallicRoughness": { "baseColorTexture": { "index": 1 } } }),
+            json!({ "name": "glass", "pbrMetallicRoughness": { "baseColorFactor": [0.5, 0.25, 1.0, 0.5] } }),
+        ],
+        textures: vec![json!({ "source": 0 }), json!({ "source": 1 })],
+        images: vec![
+            Image { json: json!({ "name": "paint" }), source: ImageSource::Bytes(png.clone()), mime_type: None },
+            Image { json: json!({}), source: ImageSource::File(elsewhere.join("wood grain.jpg")), mime_type: None },
+        ],
+        ..Default::default()
+    };
+    cube.corners.library = Some(std::sync::Arc::new(library));
+    write_mesh(dir.join("cube.obj"), &cube).unwrap();
+    let mtl = std::fs::read_to_string(dir.join("cube.mtl")).unwrap();
+    assert!(mtl.contains("map_Kd cube_paint.png") && mtl.contains("map_Kd cube_wood_grain.jpg"), "{mtl}");
+    assert!(mtl.contains("Kd 0.5 0.25 1\nd 0.5"), "{mtl}");
+    let back = read_mesh(dir.join("cube.obj")).unwrap();
+    assert_eq!(back.corners.materials, cube.corners.materials);
+    let read = back.corners.library.as_deref().unwrap();
+    let names: Vec<String> = (0..3).map(|m| read.material_name(m)).collect();
+    assert_eq!(names, ["painted", "wood", "glass"]);
+    assert_eq!(read.materials[2]["pbrMetallicRoughness"]["baseColorFactor"], json!([0.5, 0.25, 1.0, 0.5]));
+    let bytes = |image: &Image| match &image.source {
+        ImageSource::File(file) => std::fs::read(file).unwrap(),
+        other => panic!("{other:?}"),
+    };
+    assert_eq!((bytes(&read.images[0]), bytes(&read.images[1])), (png, jpeg));
+    // Written again into the same folder, the images already there are named, not copied.
+    write_mesh(dir.join("again.obj"), &back).unwrap();
+    let mtl = std::fs::read_to_string(dir.join("again.mtl")).unwrap();
+    assert!(mtl.contains("map_Kd cube_paint.png") && mtl.contains("map_Kd cube_wood_grain.jpg"), "{mtl}");
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 6, "two OBJ, two MTL, two images");
+    // To a stream (no folder): the materials by name only.
+    let mut text = Vec::new();
+    write_mesh_to(&mut text, &cube, MeshFormat::Obj).unwrap();
+    let text = String::from_utf8(text).unwrap();
+    assert!(text.contains("usemtl wood") && !text.contains("mtllib"));
+}
+
 #[test]
 fn textured_assets_come_out_as_gltf_with_their_attributes_and_textures() {
     use meshlod_engine::mesh::ImageSource;
@@ -247,6 +301,23 @@ fn textured_assets_come_out_as_gltf_with_their_attributes_and_textures() {
         assert_eq!(back.corners.names(), names, "{name}: every attribute kept");
         assert_eq!(corner_positions(&back), corner_positions(&lod), "{name}");
         assert_eq!(back.corners.uvs.as_deref(), lod.corners.uvs_with_origin(true).as_deref(), "{name}");
+        // As OBJ: each material the result uses named in an MTL file beside it, with the input's
+        // base-colour texture beside that (the same bytes) wherever the input could read it.
+        let obj_out = out.with_extension("obj");
+        write_mesh(&obj_out, &lod).unwrap();
+        if let (Some(input), Some(_)) = (mesh.corners.library.as_deref(), &mesh.corners.materials) {
+            let from_obj = read_mesh(&obj_out).unwrap();
+            let read = from_obj.corners.library.as_deref().expect("the OBJ's materials read back");
+            assert!(!read.materials.is_empty(), "{name}");
+            for m in 0..read.materials.len() as u32 {
+                let own = (0..input.materials.len() as u32).find(|&i| input.material_name(i) == read.material_name(m));
+                let own =
+                    own.unwrap_or_else(|| panic!("{name}: material {} is not the input's", read.material_name(m)));
+                if let Some(texture) = base_colour_image(input, own) {
+                    assert_eq!(base_colour_image(read, m).as_ref(), Some(&texture), "{name}: material {m}'s texture");
+                }
+            }
+        }
         // Every image the input could read travels inside the GLB; one it could not (missing from
         // its folder) is referred to from the output's folder.
         let (Some(input), Some(output)) = (mesh.corners.library.as_deref(), back.corners.library.as_deref()) else {
@@ -276,6 +347,18 @@ fn textured_assets_come_out_as_gltf_with_their_attributes_and_textures() {
             assert_eq!(material["name"], "material0");
             assert_eq!(material["pbrMetallicRoughness"]["baseColorTexture"]["index"], 0);
         }
+    }
+}
+
+/// The bytes of material `m`'s base-colour image, where they can be read.
+fn base_colour_image(library: &meshlod_engine::mesh::MaterialLibrary, m: u32) -> Option<Vec<u8>> {
+    use meshlod_engine::mesh::ImageSource;
+    let texture = library.materials[m as usize]["pbrMetallicRoughness"]["baseColorTexture"]["index"].as_u64()?;
+    let source = library.textures.get(texture as usize)?["source"].as_u64()?;
+    match &library.images.get(source as usize)?.source {
+        ImageSource::Bytes(bytes) => Some(bytes.clone()),
+        ImageSource::File(file) => std::fs::read(file).ok(),
+        ImageSource::Uri(_) => None,
     }
 }
 

@@ -480,7 +480,7 @@ fn add_library(
 }
 
 /// The media type of image bytes, from their magic numbers.
-fn sniff_image(bytes: &[u8]) -> Option<&'static str> {
+pub(super) fn sniff_image(bytes: &[u8]) -> Option<&'static str> {
     if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
         Some("image/png")
     } else if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
@@ -496,27 +496,7 @@ fn sniff_image(bytes: &[u8]) -> Option<&'static str> {
 
 /// `path` as a URI relative to `folder` (both made absolute first), spaces and the like escaped.
 fn relative_uri(path: &Path, folder: Option<&Path>) -> Option<String> {
-    let absolute = |p: &Path| -> Option<PathBuf> {
-        let p = if p.is_absolute() { p.to_path_buf() } else { std::env::current_dir().ok()?.join(p) };
-        // Resolve `.` and `..` by hand: the file may not exist.
-        let mut out = PathBuf::new();
-        for c in p.components() {
-            match c {
-                Component::ParentDir => {
-                    out.pop();
-                }
-                Component::CurDir => {}
-                other => out.push(other),
-            }
-        }
-        Some(out)
-    };
-    let (target, base) = (absolute(path)?, absolute(folder?)?);
-    let (t, b): (Vec<_>, Vec<_>) = (target.components().collect(), base.components().collect());
-    let common = t.iter().zip(&b).take_while(|(x, y)| x == y).count();
-    let mut parts: Vec<String> = vec!["..".into(); b.len() - common];
-    parts.extend(t[common..].iter().map(|c| c.as_os_str().to_string_lossy().into_owned()));
-    let joined = parts.join("/");
+    let joined = relative_path(path, folder?)?;
     let mut uri = String::new();
     for ch in joined.chars() {
         match ch {
@@ -530,6 +510,31 @@ fn relative_uri(path: &Path, folder: Option<&Path>) -> Option<String> {
         }
     }
     Some(uri)
+}
+
+/// `path` relative to `folder` (both made absolute first, `.` and `..` resolved by hand: the file
+/// may not exist), its parts joined by `/`.
+pub(super) fn relative_path(path: &Path, folder: &Path) -> Option<String> {
+    let absolute = |p: &Path| -> Option<PathBuf> {
+        let p = if p.is_absolute() { p.to_path_buf() } else { std::env::current_dir().ok()?.join(p) };
+        let mut out = PathBuf::new();
+        for c in p.components() {
+            match c {
+                Component::ParentDir => {
+                    out.pop();
+                }
+                Component::CurDir => {}
+                other => out.push(other),
+            }
+        }
+        Some(out)
+    };
+    let (target, base) = (absolute(path)?, absolute(folder)?);
+    let (t, b): (Vec<_>, Vec<_>) = (target.components().collect(), base.components().collect());
+    let common = t.iter().zip(&b).take_while(|(x, y)| x == y).count();
+    let mut parts: Vec<String> = vec!["..".into(); b.len() - common];
+    parts.extend(t[common..].iter().map(|c| c.as_os_str().to_string_lossy().into_owned()));
+    Some(parts.join("/"))
 }
 
 #[cfg(test)]

@@ -288,6 +288,8 @@ impl WriteOptions {
 }
 
 /// Writes a mesh to a file whose extension (`.obj`, `.ply`, `.gltf`, `.glb`) picks the format.
+/// An OBJ with materials gets its MTL file beside it (`OUT.mtl`, named by `mtllib`), with the
+/// materials' base-colour textures (`mtl::write_library`).
 pub fn write_mesh(path: impl AsRef<Path>, mesh: &Mesh) -> Result<(), MeshError> {
     write_mesh_with(path, mesh, &WriteOptions::default())
 }
@@ -303,6 +305,14 @@ pub fn write_mesh_with(path: impl AsRef<Path>, mesh: &Mesh, options: &WriteOptio
         let binary = !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gltf"));
         let folder = path.parent().map(|p| if p.as_os_str().is_empty() { Path::new(".") } else { p });
         write_gltf_with(&mut writer, mesh, binary, folder, options).map_err(|e| io_error(path, e))?;
+    } else if let (MeshFormat::Obj, Some(_), Some(library)) = (format, &mesh.corners.materials, &mesh.corners.library)
+        && !library.materials.is_empty()
+    {
+        // The materials in an MTL file of the same stem, their textures beside it.
+        let mtl = path.with_extension("mtl");
+        mtl::write_library(&mtl, library).map_err(|e| io_error(&mtl, e))?;
+        let name = mtl.file_name().map(|n| n.to_string_lossy().into_owned());
+        obj::write_obj_with_library(&mut writer, mesh, name.as_deref()).map_err(|e| io_error(path, e))?;
     } else {
         write_mesh_to(&mut writer, mesh, format).map_err(|e| io_error(path, e))?;
     }

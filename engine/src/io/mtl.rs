@@ -1,10 +1,14 @@
 //! Wavefront MTL material files, translated into glTF terms ([`MaterialLibrary`]) so that an OBJ
-//! written as glTF draws with its diffuse colour, opacity and diffuse texture.
+//! written as glTF draws with its diffuse colour, opacity and diffuse texture, and written back
+//! from them beside an OBJ ([`write_library`]) so that an OBJ written from any input draws with its
+//! materials.
 //!
 //! Only what a textured LOD needs is read: `newmtl`, `Kd`, `d` and `map_Kd` (its options skipped,
 //! the file name may hold spaces). `Tr` is not read: exporters disagree on whether it means
 //! transparency or opacity. A material named by `usemtl` but found in no MTL file keeps its name.
+//! The same four statements are written.
 
+use std::fmt::Write as _;
 use std::path::Path;
 
 use serde_json::json;
@@ -87,6 +91,102 @@ pub(crate) fn library(names: &[String], libraries: &[String], folder: Option<&Pa
         library.images.push(Image { json: json!({ "name": file }), source, mime_type });
     }
     library
+}
+
+/// Writes `library`'s materials as the MTL file `path`: per material its name (as `usemtl` names
+/// it), `Kd` and `d` from its base colour, and `map_Kd` for its base-colour texture. Each such image
+/// is put beside the file so that the OBJ draws without the input's folder: an image file already
+/// in that folder is named as it is; one elsewhere, or one held in memory (from a GLB or a data
+/// URI), is written there as `STEM_NAME` (`STEM` the MTL file's stem); one that cannot be read is
+/// named by its path relative to the folder, as the input had it.
+pub(crate) fn write_library(path: &Path, library: &MaterialLibrary) -> std::io::Result<()> {
+    let folder = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let stem = path.file_stem().map_or("materials".into(), |s| s.to_string_lossy().into_owned());
+    let mut placed: Vec<Option<String>> = vec![None; library.images.len()];
+    let mut written: Vec<String> = Vec::new();
+    let mut text = String::from("# meshlod\n");
+    for (index, material) in library.materials.iter().enumerate() {
+        // (Writing to a String cannot fail.)
+        let _ = writeln!(text, "\nnewmtl {}", one_line(&library.material_name(index as u32)));
+        let pbr = &material["pbrMetallicRoughness"];
+        let factor = |k: usize| pbr["baseColorFactor"][k].as_f64().filter(|x| x.is_finite()).unwrap_or(1.0);
+        let _ = writeln!(text, "Kd {} {} {}", factor(0), factor(1), factor(2));
+        if factor(3) < 1.0 {
+            let _ = writeln!(text, "d {}", factor(3));
+        }
+        let image = pbr["baseColorTexture"]["index"]
+            .as_u64()
+            .and_then(|t| library.textures.get(t as usize))
+            .and_then(|t| t["source"].as_u64())
+            .map(|i| i as usize)
+            .filter(|&i| i < library.images.len());
+        if let Some(i) = image {
+            if placed[i].is_none() {
+                placed[i] = Some(place_image(folder, &stem, i, &library.images[i], &mut written)?);
+            }
+            if let Some(name) = &placed[i] {
+                let _ = writeln!(text, "map_Kd {name}");
+            }
+        }
+    }
+    std::fs::write(path, text)
+}
+
+/// The name an MTL file in `folder` gives image `index` (see [`write_library`]), the image written
+/// there first where it has to be; `written`: the names written so far (a second image of the same
+/// name gets its index in front).
+fn place_image(
+    folder: &Path,
+    stem: &str,
+    index: usize,
+    image: &Image,
+    written: &mut Vec<String>,
+) -> std::io::Result<String> {
+    let (bytes, name) = match &image.source {
+        ImageSource::Uri(uri) => return Ok(one_line(&uri.replace("%20", " "))),
+        ImageSource::File(file) => {
+            let name = file.file_name().map_or(format!("image{index}"), |n| n.to_string_lossy().into_owned());
+            let here = |p: &Path| std::fs::canonicalize(p).ok();
+            if file.parent().and_then(here).is_some_and(|p| Some(p) == here(folder)) && file.is_file() {
+                return Ok(one_line(&name));
+            }
+            match super::read_referenced(file) {
+                Ok(bytes) => (bytes, name),
+                Err(_) => {
+                    let relative = super::gltf_write::relative_path(file, folder);
+                    return Ok(one_line(&relative.unwrap_or_else(|| file.to_string_lossy().into_owned())));
+                }
+            }
+        }
+        ImageSource::Bytes(bytes) => {
+            let extension = match super::gltf_write::sniff_image(bytes).or(image.mime_type.as_deref()) {
+                Some("image/png") => "png",
+                Some("image/jpeg") => "jpg",
+                Some("image/webp") => "webp",
+                Some("image/ktx2") => "ktx2",
+                _ => "bin",
+            };
+            let base =
+                image.json["name"].as_str().filter(|n| !n.is_empty()).map_or(format!("image{index}"), str::to_string);
+            let has_extension = Path::new(&base).extension().is_some_and(|e| e.eq_ignore_ascii_case(extension));
+            (bytes.clone(), if has_extension { base } else { format!("{base}.{extension}") })
+        }
+    };
+    // A plain file name: other characters (path separators among them) become `_`.
+    let clean: String =
+        name.chars().map(|c| if c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | '_') { c } else { '_' }).collect();
+    let mut file = format!("{stem}_{clean}");
+    if written.contains(&file) {
+        file = format!("{stem}_{index}_{clean}");
+    }
+    std::fs::write(folder.join(&file), bytes)?;
+    written.push(file.clone());
+    Ok(file)
+}
+
+/// `text` on one line (an MTL statement ends at the line's end).
+fn one_line(text: &str) -> String {
+    text.replace(['\n', '\r'], " ")
 }
 
 /// The `newmtl` entries of an MTL file.

@@ -254,9 +254,18 @@ pub fn read_obj(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadL
 /// Writes positions and triangles as OBJ (1-based indices), with the texture coordinates (`vt`)
 /// and normals (`vn`) the mesh carries per corner, each distinct value written once and the faces
 /// as `v/vt/vn`. Floats use the shortest representation that reads back to the same `f32`, so a
-/// write/read round trip is exact. Colours have no OBJ form and are not written.
+/// write/read round trip is exact. Colours have no OBJ form and are not written. Materials are
+/// named by `usemtl`; their MTL file is written only beside a file ([`super::write_mesh`]).
 pub fn write_obj(out: &mut impl Write, mesh: &Mesh) -> std::io::Result<()> {
+    write_obj_with_library(out, mesh, None)
+}
+
+/// [`write_obj`], the materials' MTL file named by `mtllib` when given.
+pub(super) fn write_obj_with_library(out: &mut impl Write, mesh: &Mesh, mtllib: Option<&str>) -> std::io::Result<()> {
     writeln!(out, "# meshlod: {} vertices, {} triangles", mesh.vertex_count(), mesh.face_count())?;
+    if let Some(name) = mtllib {
+        writeln!(out, "mtllib {name}")?;
+    }
     for p in &mesh.positions {
         writeln!(out, "v {} {} {}", p[0], p[1], p[2])?;
     }
@@ -286,7 +295,6 @@ pub fn write_obj(out: &mut impl Write, mesh: &Mesh) -> std::io::Result<()> {
     }
     let mut material = NO_MATERIAL;
     for (f, t) in mesh.triangles.iter().enumerate() {
-        // Material names as `usemtl` (the MTL file itself is not written).
         if let (Some(materials), Some(library)) = (&mesh.corners.materials, &mesh.corners.library)
             && materials[3 * f] != material
             && materials[3 * f] != NO_MATERIAL
