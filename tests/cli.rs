@@ -620,6 +620,15 @@ fn textured_gltf_assets_convert_to_obj_with_their_attributes() {
         report["warnings"].as_array().unwrap().iter().map(|w| w.as_str().unwrap().to_string()).collect::<Vec<_>>()
     };
     assert_eq!(warnings("draco__CesiumMan/CesiumMan.gltf"), Vec::<String>::new());
+    // A progressive mesh's bytes per split leave its materials and images out (Fox's texture is
+    // most of its file).
+    let (out, pm) = (dir.join("fox.glb"), dir.join("fox.pm"));
+    let fox = textured.join("draco__Fox/Fox.gltf");
+    let report = ok_json(&["simplify", s(&fox), "-o", s(&out), "--ratio", "0.5", "--pm", s(&pm), "--json"]);
+    let materials = report["pm_materials_bytes"].as_f64().unwrap();
+    let png = std::fs::metadata(textured.join("draco__Fox/Texture.png")).unwrap().len() as f64;
+    assert!(materials > png, "{report}");
+    assert!(report["bytes_per_split"].as_f64().unwrap() < 64.0, "{report}");
     let out = dir.join("lod.obj");
     let cesium = textured.join("draco__CesiumMan/CesiumMan.gltf");
     let report = ok_json(&["simplify", s(&cesium), "-o", s(&out), "--ratio", "0.9", "--json"]);

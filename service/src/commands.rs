@@ -201,8 +201,13 @@ fn run_simplify(executor: &dyn Executor, args: &SimplifyArgs) -> Result<()> {
     );
     print_hausdorff_line(&report)?;
     if let (Some(pm), true) = (&args.pm, report.contains_key("pm_bytes")) {
+        let materials = if num(&report, "pm_materials_bytes") > 0.0 {
+            format!(", {} of them materials and images", text(&report, "pm_materials_bytes"))
+        } else {
+            String::new()
+        };
         out!(
-            "  progressive mesh: {} splits, {} bytes ({} bytes per split) → {}",
+            "  progressive mesh: {} splits, {} bytes{materials} ({} bytes per split) → {}",
             text(&report, "pm_splits"),
             text(&report, "pm_bytes"),
             sig(num(&report, "bytes_per_split")),

@@ -94,13 +94,16 @@ fn refused(r: Option<&proto::Refusals>) -> Value {
     })
 }
 
-/// The progressive-mesh keys of a simplify report whose `.pm` file has `bytes` bytes.
+/// The progressive-mesh keys of a simplify report whose `.pm` file has `bytes` bytes: the
+/// materials section (its images inside) apart, and the bytes per split without it or the base.
 pub fn progressive(pm: &ProgressiveMesh, bytes: usize) -> Report {
     let base_bytes = 12 * (pm.base().vertex_count() + pm.base().face_count());
+    let materials = meshlod_engine::pm_format::materials_section_len(pm);
     object(json!({
         "pm_bytes": bytes,
+        "pm_materials_bytes": materials,
         "pm_splits": pm.levels(),
-        "bytes_per_split": (bytes.saturating_sub(base_bytes + 32)) as f64 / pm.levels().max(1) as f64,
+        "bytes_per_split": (bytes.saturating_sub(base_bytes + 32 + materials)) as f64 / pm.levels().max(1) as f64,
     }))
 }
 
