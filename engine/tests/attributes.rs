@@ -222,60 +222,6 @@ fn gltf_round_trips_values_materials_and_images() {
     assert!(err.contains("face 11 names material 2"), "{err}");
 }
 
-/// An OBJ written to a file gets its materials in an MTL file beside it, with their base-colour
-/// textures: an image held in memory or a file elsewhere is written beside it, a file already
-/// there is named as it is, and all of it reads back.
-#[test]
-fn obj_files_come_with_their_materials_and_textures() {
-    use meshlod_engine::mesh::{Image, ImageSource, MaterialLibrary};
-    use serde_json::json;
-    let (dir, elsewhere) = (tempdir("obj-materials"), tempdir("obj-materials-elsewhere"));
-    let png = b"\x89PNG\r\n\x1a\n held in memory".to_vec();
-    let jpeg = b"\xFF\xD8\xFF a file elsewhere".to_vec();
-    std::fs::write(elsewhere.join("wood grain.jpg"), &jpeg).unwrap();
-    let mut cube = textured_cube();
-    cube.corners.materials = Some((0..12u32).flat_map(|f| [f / 4; 3]).collect());
-    let library = MaterialLibrary {
-        materials: vec![
-            json!({ "name": "painted", "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }),
-            json!({ "name": "wood", "pbrMetallicRoughness": { "baseColorTexture": { "index": 1 } } }),
-            json!({ "name": "glass", "pbrMetallicRoughness": { "baseColorFactor": [0.5, 0.25, 1.0, 0.5] } }),
-        ],
-        textures: vec![json!({ "source": 0 }), json!({ "source": 1 })],
-        images: vec![
-            Image { json: json!({ "name": "paint" }), source: ImageSource::Bytes(png.clone()), mime_type: None },
-            Image { json: json!({}), source: ImageSource::File(elsewhere.join("wood grain.jpg")), mime_type: None },
-        ],
-        ..Default::default()
-    };
-    cube.corners.library = Some(std::sync::Arc::new(library));
-    write_mesh(dir.join("cube.obj"), &cube).unwrap();
-    let mtl = std::fs::read_to_string(dir.join("cube.mtl")).unwrap();
-    assert!(mtl.contains("map_Kd cube_paint.png") && mtl.contains("map_Kd cube_wood_grain.jpg"), "{mtl}");
-    assert!(mtl.contains("Kd 0.5 0.25 1\nd 0.5"), "{mtl}");
-    let back = read_mesh(dir.join("cube.obj")).unwrap();
-    assert_eq!(back.corners.materials, cube.corners.materials);
-    let read = back.corners.library.as_deref().unwrap();
-    let names: Vec<String> = (0..3).map(|m| read.material_name(m)).collect();
-    assert_eq!(names, ["painted", "wood", "glass"]);
-    assert_eq!(read.materials[2]["pbrMetallicRoughness"]["baseColorFactor"], json!([0.5, 0.25, 1.0, 0.5]));
-    let bytes = |image: &Image| match &image.source {
-        ImageSource::File(file) => std::fs::read(file).unwrap(),
-        other => panic!("{other:?}"),
-    };
-    assert_eq!((bytes(&read.images[0]), bytes(&read.images[1])), (png, jpeg));
-    // Written again into the same folder, the images already there are named, not copied.
-    write_mesh(dir.join("again.obj"), &back).unwrap();
-    let mtl = std::fs::read_to_string(dir.join("again.mtl")).unwrap();
-    assert!(mtl.contains("map_Kd cube_paint.png") && mtl.contains("map_Kd cube_wood_grain.jpg"), "{mtl}");
-    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 6, "two OBJ, two MTL, two images");
-    // To a stream (no folder): the materials by name only.
-    let mut text = Vec::new();
-    write_mesh_to(&mut text, &cube, MeshFormat::Obj).unwrap();
-    let text = String::from_utf8(text).unwrap();
-    assert!(text.contains("usemtl wood") && !text.contains("mtllib"));
-}
-
 #[test]
 fn textured_assets_come_out_as_gltf_with_their_attributes_and_textures() {
     use meshlod_engine::mesh::ImageSource;

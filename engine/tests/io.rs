@@ -529,3 +529,66 @@ fn gltf_attribute_faults_name_the_primitive() {
     let e = read(4, &[[0.0, 0.0]; 4]).unwrap_err().to_string();
     assert!(e.contains("mesh 0 primitive 0: 4 indices: not a whole number of triangles"), "{e}");
 }
+
+/// An OBJ written to a file gets its materials in an MTL file beside it, with their base-colour
+/// textures: an image held in memory or a file elsewhere is written beside it, a file already
+/// there is named as it is, and all of it reads back.
+#[test]
+fn obj_files_come_with_their_materials_and_textures() {
+    use meshlod_engine::mesh::{Image, ImageSource, MaterialLibrary};
+    use serde_json::json;
+    let (dir, elsewhere) = (tempdir("obj-materials"), tempdir("obj-materials-elsewhere"));
+    let png = b"\x89PNG\r\n\x1a\n held in memory".to_vec();
+    let jpeg = b"\xFF\xD8\xFF a file elsewhere".to_vec();
+    std::fs::write(elsewhere.join("wood grain.jpg"), &jpeg).unwrap();
+    let mut sphere = procedural::icosphere(1);
+    sphere.corners.materials = Some((0..sphere.face_count() as u32).flat_map(|f| [f % 3; 3]).collect());
+    let library = MaterialLibrary {
+        materials: vec![
+            json!({ "name": "painted", "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }),
+            json!({ "name": "wood", "pbrMetallicRoughness": { "baseColorTexture": { "index": 1 } } }),
+            json!({ "name": "glass", "pbrMetallicRoughness": { "baseColorFactor": [0.5, 0.25, 1.0, 0.5] } }),
+        ],
+        textures: vec![json!({ "source": 0 }), json!({ "source": 1 })],
+        images: vec![
+            Image { json: json!({ "name": "paint" }), source: ImageSource::Bytes(png.clone()), mime_type: None },
+            Image { json: json!({}), source: ImageSource::File(elsewhere.join("wood grain.jpg")), mime_type: None },
+        ],
+        ..Default::default()
+    };
+    sphere.corners.library = Some(std::sync::Arc::new(library));
+    write_mesh(dir.join("sphere.obj"), &sphere).unwrap();
+    let mtl = std::fs::read_to_string(dir.join("sphere.mtl")).unwrap();
+    assert!(mtl.contains("map_Kd paint.png") && mtl.contains("map_Kd wood_grain.jpg"), "{mtl}");
+    assert!(mtl.contains("Kd 0.5 0.25 1\nd 0.5"), "{mtl}");
+    let back = read_mesh(dir.join("sphere.obj")).unwrap();
+    assert_eq!(back.corners.materials, sphere.corners.materials);
+    let read = back.corners.library.as_deref().unwrap();
+    let names: Vec<String> = (0..3).map(|m| read.material_name(m)).collect();
+    assert_eq!(names, ["painted", "wood", "glass"]);
+    assert_eq!(read.materials[2]["pbrMetallicRoughness"]["baseColorFactor"], json!([0.5, 0.25, 1.0, 0.5]));
+    let bytes = |image: &Image| match &image.source {
+        ImageSource::File(file) => std::fs::read(file).unwrap(),
+        other => panic!("{other:?}"),
+    };
+    assert_eq!((bytes(&read.images[0]), bytes(&read.images[1])), (png.clone(), jpeg));
+    // Written again into the same folder, the images already there are named, not copied; an
+    // image of the same name and other bytes takes the stem in front, leaving the first alone.
+    write_mesh(dir.join("again.obj"), &back).unwrap();
+    let mtl = std::fs::read_to_string(dir.join("again.mtl")).unwrap();
+    assert!(mtl.contains("map_Kd paint.png") && mtl.contains("map_Kd wood_grain.jpg"), "{mtl}");
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 6, "two OBJ, two MTL, two images");
+    let mut other = sphere.clone();
+    let mut library = other.corners.library.as_deref().unwrap().clone();
+    library.images[0].source = ImageSource::Bytes(b"\x89PNG\r\n\x1a\n another paint".to_vec());
+    other.corners.library = Some(std::sync::Arc::new(library));
+    write_mesh(dir.join("other.obj"), &other).unwrap();
+    let mtl = std::fs::read_to_string(dir.join("other.mtl")).unwrap();
+    assert!(mtl.contains("map_Kd other_paint.png") && mtl.contains("map_Kd wood_grain.jpg"), "{mtl}");
+    assert_eq!(bytes(&read.images[0]), png, "the first paint is left as it was");
+    // To a stream (no folder): the materials by name only.
+    let mut text = Vec::new();
+    write_mesh_to(&mut text, &sphere, MeshFormat::Obj).unwrap();
+    let text = String::from_utf8(text).unwrap();
+    assert!(text.contains("usemtl wood") && !text.contains("mtllib"));
+}

@@ -97,8 +97,9 @@ pub(crate) fn library(names: &[String], libraries: &[String], folder: Option<&Pa
 /// it), `Kd` and `d` from its base colour, and `map_Kd` for its base-colour texture. Each such image
 /// is put beside the file so that the OBJ draws without the input's folder: an image file already
 /// in that folder is named as it is; one elsewhere, or one held in memory (from a GLB or a data
-/// URI), is written there as `STEM_NAME` (`STEM` the MTL file's stem); one that cannot be read is
-/// named by its path relative to the folder, as the input had it.
+/// URI), is written there under its own name (`STEM_NAME` where a different file has that name,
+/// `STEM` the MTL file's stem); one that cannot be read is named by its path relative to the
+/// folder, as the input had it.
 pub(crate) fn write_library(path: &Path, library: &MaterialLibrary) -> std::io::Result<()> {
     let folder = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let stem = path.file_stem().map_or("materials".into(), |s| s.to_string_lossy().into_owned());
@@ -133,8 +134,7 @@ pub(crate) fn write_library(path: &Path, library: &MaterialLibrary) -> std::io::
 }
 
 /// The name an MTL file in `folder` gives image `index` (see [`write_library`]), the image written
-/// there first where it has to be; `written`: the names written so far (a second image of the same
-/// name gets its index in front).
+/// there first where it has to be; `written`: the names this library's images took so far.
 fn place_image(
     folder: &Path,
     stem: &str,
@@ -172,16 +172,32 @@ fn place_image(
             (bytes.clone(), if has_extension { base } else { format!("{base}.{extension}") })
         }
     };
-    // A plain file name: other characters (path separators among them) become `_`.
+    // A plain file name: other characters (path separators among them) become `_`. The name
+    // itself where that file is free or already holds these bytes (LODs of one asset written to
+    // one folder share their textures), else the stem in front, else the index too.
     let clean: String =
         name.chars().map(|c| if c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | '_') { c } else { '_' }).collect();
-    let mut file = format!("{stem}_{clean}");
-    if written.contains(&file) {
-        file = format!("{stem}_{index}_{clean}");
+    let candidates = [clean.clone(), format!("{stem}_{clean}"), format!("{stem}_{index}_{clean}")];
+    for (k, file) in candidates.iter().enumerate() {
+        if written.contains(file) {
+            continue;
+        }
+        let target = folder.join(file);
+        let last = k == candidates.len() - 1;
+        match std::fs::symlink_metadata(&target) {
+            Err(_) => {}
+            Ok(meta) if meta.is_file() && super::read_referenced(&target).is_ok_and(|held| held == bytes) => {
+                written.push(file.clone());
+                return Ok(file.clone());
+            }
+            Ok(meta) if meta.is_file() && last => {}
+            Ok(_) => continue,
+        }
+        std::fs::write(&target, &bytes)?;
+        written.push(file.clone());
+        return Ok(file.clone());
     }
-    std::fs::write(folder.join(&file), bytes)?;
-    written.push(file.clone());
-    Ok(file)
+    Err(std::io::Error::other(format!("no free name for image {index} ('{clean}') beside the MTL file")))
 }
 
 /// `text` on one line (an MTL statement ends at the line's end).
