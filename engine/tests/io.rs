@@ -592,3 +592,19 @@ fn obj_files_come_with_their_materials_and_textures() {
     let text = String::from_utf8(text).unwrap();
     assert!(text.contains("usemtl wood") && !text.contains("mtllib"));
 }
+
+/// Texture coordinates or normals on some faces only cannot be carried (a mesh has them at every
+/// corner or at none): they are left out, and the warning every command prints says so.
+#[test]
+fn obj_values_on_some_faces_only_are_said_to_be_left_out() {
+    let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n\
+        f 1/1/1 2/2/1 3/3/1\nf 1//1 3//1 4//1\nf 1 4 5\n";
+    let mesh = obj(text).unwrap();
+    assert_eq!((mesh.corners.uvs.as_ref(), mesh.corners.normals.as_ref()), (None, None));
+    let warning = mesh.corners.not_carried_warning().expect("said");
+    assert!(warning.contains("texture coordinates (given at 3 of 9 face corners)"), "{warning}");
+    assert!(warning.contains("normals (given at 6 of 9 face corners)"), "{warning}");
+    // Given everywhere, nothing is said.
+    let whole = obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nf 1/1 2/2 3/3\n").unwrap();
+    assert!(whole.corners.uvs.is_some() && whole.corners.not_carried_warning().is_none());
+}

@@ -236,9 +236,26 @@ pub fn read_obj(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadL
         lookup(&corner_normal, normals.len(), "normal")?;
         corners.normals = Some(corner_normal.iter().map(|&i| normals[i as usize]).collect());
     }
-    if !material_names.is_empty() {
-        corners.materials = Some(triangle_materials.iter().flat_map(|&m| [m; 3]).collect());
-        corners.library = Some(std::sync::Arc::new(super::mtl::library(&material_names, &libraries, folder)));
+    // Values on some faces and not on others: a mesh carries an attribute at every corner or at
+    // none, so they are left out, and said (the warnings of every command that writes a result).
+    let corner_count = 3 * triangles.len();
+    let partial = |given: usize, what: &str| {
+        (given > 0 && given < corner_count).then(|| format!("{what} (given at {given} of {corner_count} face corners)"))
+    };
+    let not_carried: Vec<String> = [
+        partial(if all_have_uv { 0 } else { corner_uv.len() }, "texture coordinates"),
+        partial(if all_have_normal { 0 } else { corner_normal.len() }, "normals"),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    if !material_names.is_empty() || !not_carried.is_empty() {
+        let mut library = super::mtl::library(&material_names, &libraries, folder);
+        library.not_carried = not_carried;
+        if !material_names.is_empty() {
+            corners.materials = Some(triangle_materials.iter().flat_map(|&m| [m; 3]).collect());
+        }
+        corners.library = Some(std::sync::Arc::new(library));
     }
     let mut mesh = Mesh { positions, triangles, corners };
     if !mesh.corners.is_empty() {
