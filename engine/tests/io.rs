@@ -593,18 +593,69 @@ fn obj_files_come_with_their_materials_and_textures() {
     assert!(text.contains("usemtl wood") && !text.contains("mtllib"));
 }
 
-/// Texture coordinates or normals on some faces only cannot be carried (a mesh has them at every
-/// corner or at none): they are left out, and the warning every command prints says so.
+/// Texture coordinates on some faces only are kept, the other faces' set to zero (as a glTF
+/// primitive without them beside one with them); normals on some faces only are left out (a face
+/// without them is drawn flat), and the warning every command prints says so.
 #[test]
-fn obj_values_on_some_faces_only_are_said_to_be_left_out() {
+fn obj_values_on_some_faces_only() {
     let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n\
         f 1/1/1 2/2/1 3/3/1\nf 1//1 3//1 4//1\nf 1 4 5\n";
     let mesh = obj(text).unwrap();
-    assert_eq!((mesh.corners.uvs.as_ref(), mesh.corners.normals.as_ref()), (None, None));
+    let uvs = mesh.corners.uvs.as_ref().expect("kept");
+    assert_eq!(uvs[..3], [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]);
+    assert!(uvs[3..].iter().all(|&uv| uv == [0.0, 0.0]));
+    assert!(mesh.corners.normals.is_none());
     let warning = mesh.corners.not_carried_warning().expect("said");
-    assert!(warning.contains("texture coordinates (given at 3 of 9 face corners)"), "{warning}");
-    assert!(warning.contains("normals (given at 6 of 9 face corners)"), "{warning}");
+    assert!(warning.contains("normals (given at 6 of 9 face corners)") && !warning.contains("texture"), "{warning}");
+    // A texture coordinate out of range is refused where some faces have none too.
+    let e = obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nf 1/1 2/2 3/1\nf 1 2 3\n").unwrap_err().to_string();
+    assert!(e.contains("line 5") && e.contains("texture coordinate 2 but the file has 1"), "{e}");
     // Given everywhere, nothing is said.
-    let whole = obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nf 1/1 2/2 3/3\n").unwrap();
-    assert!(whole.corners.uvs.is_some() && whole.corners.not_carried_warning().is_none());
+    let whole = obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n").unwrap();
+    assert!(whole.corners.normals.is_some() && whole.corners.not_carried_warning().is_none());
+}
+
+/// A glTF mesh whose primitives differ in their attributes: texture coordinates and colours are
+/// kept (a primitive without them takes zero and white, as glTF draws it), normals only when
+/// every primitive has them (said otherwise).
+#[test]
+fn gltf_primitives_with_different_attributes() {
+    // Two triangles side by side: the first with NORMAL, TEXCOORD_0 and COLOR_0, the second with
+    // positions only.
+    let mut bin = Vec::new();
+    let floats =
+        |bin: &mut Vec<u8>, values: &[f32]| values.iter().for_each(|c| bin.extend_from_slice(&c.to_le_bytes()));
+    floats(&mut bin, &[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+    floats(&mut bin, &[0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0]);
+    floats(&mut bin, &[0.25, 0.5, 0.75, 0.5, 0.25, 1.0]);
+    floats(&mut bin, &[0.5, 0.5, 0.5, 1.0, 0.5, 0.5, 0.5, 1.0, 0.5, 0.5, 0.5, 1.0]);
+    floats(&mut bin, &[1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 0.0]);
+    let view = |offset: usize, length: usize| format!(r#"{{"buffer":0,"byteOffset":{offset},"byteLength":{length}}}"#);
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":{},"uri":"{}"}}],
+        "bufferViews":[{},{},{},{},{}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                     {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"}},
+                     {{"bufferView":2,"componentType":5126,"count":3,"type":"VEC2"}},
+                     {{"bufferView":3,"componentType":5126,"count":3,"type":"VEC4"}},
+                     {{"bufferView":4,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1,"TEXCOORD_0":2,"COLOR_0":3}}}},
+                                  {{"attributes":{{"POSITION":4}}}}]}}]}}"#,
+        bin.len(),
+        data_uri(&bin),
+        view(0, 36),
+        view(36, 36),
+        view(72, 24),
+        view(96, 48),
+        view(144, 36)
+    );
+    let mesh = read_gltf(&json, "mixed.gltf").unwrap();
+    assert_eq!(mesh.face_count(), 2);
+    let uvs = mesh.corners.uvs.as_ref().expect("texture coordinates kept");
+    assert_eq!((uvs[1], &uvs[3..]), ([0.75, 0.5], &[[0.0, 0.0]; 3][..]));
+    let colors = mesh.corners.colors.as_ref().expect("colours kept");
+    assert_eq!((colors[0], &colors[3..]), ([0.5, 0.5, 0.5, 1.0], &[[1.0; 4]; 3][..]));
+    assert!(mesh.corners.normals.is_none());
+    let warning = mesh.corners.not_carried_warning().expect("said");
+    assert!(warning.contains("normals (a primitive has no NORMAL)"), "{warning}");
 }

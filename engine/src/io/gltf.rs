@@ -4,8 +4,10 @@
 //! Every triangle primitive (TRIANGLES, and TRIANGLE_STRIP / TRIANGLE_FAN unrolled) of every mesh
 //! instance in the default scene (else the first, else every mesh once) is read, placed by its
 //! node's world transform (normals by the inverse transpose; mirrored nodes keep their faces
-//! counter-clockwise) and merged into one mesh. Kept per corner: NORMAL, TANGENT, TEXCOORD_0,
-//! TEXCOORD_1 and COLOR_0, each when every primitive has it, and JOINTS_0 / WEIGHTS_0 of a skinned asset. glTF splits a vertex wherever its attributes differ (seams,
+//! counter-clockwise) and merged into one mesh. Kept per corner: NORMAL and TANGENT when every
+//! primitive has them, TEXCOORD_0, TEXCOORD_1 and COLOR_0 when some primitive has them (the others
+//! given the values glTF draws them with: `merge`), and JOINTS_0 / WEIGHTS_0 of a skinned asset.
+//! What is left out is said. glTF splits a vertex wherever its attributes differ (seams,
 //! hard edges) and exporters often between primitives too: the cut is joined again
 //! ([`Mesh::join_cut_seams`]), so the surface is one piece with seams, not cut open.
 //! POINTS and LINES primitives are not surface and are left out.
@@ -651,14 +653,25 @@ fn quantized<const N: usize>(
     ))
 }
 
-/// Joins the parts into one mesh; an attribute is kept when every part has it.
+/// Joins the parts into one mesh. Texture coordinates and colours are kept when some part has
+/// them, a part without them taking the values glTF draws it with: white, and for texture
+/// coordinates (which a primitive without them cannot sample a texture by) zero; without that, a
+/// textured body beside an untextured part lost its texture. Normals and tangents are kept when
+/// every part has them (glTF draws a primitive without normals flat, which per-corner values could
+/// hold but the simplifier could then not move), and said otherwise.
 fn merge(parts: Vec<Part>, library: MaterialLibrary, path: &Path) -> Result<Mesh, MeshError> {
     let keep_normals = parts.iter().all(|p| p.normals.is_some());
     let keep_tangents = parts.iter().all(|p| p.tangents.is_some());
-    let keep_uvs = parts.iter().all(|p| p.uvs.is_some());
-    let keep_uvs1 = parts.iter().all(|p| p.uvs1.is_some());
-    let keep_colors = parts.iter().all(|p| p.colors.is_some());
+    let keep_uvs = parts.iter().any(|p| p.uvs.is_some());
+    let keep_uvs1 = parts.iter().any(|p| p.uvs1.is_some());
+    let keep_colors = parts.iter().any(|p| p.colors.is_some());
     let mut library = library;
+    if !keep_normals && parts.iter().any(|p| p.normals.is_some()) {
+        library.not_carried.push("normals (a primitive has no NORMAL)".into());
+    }
+    if !keep_tangents && parts.iter().any(|p| p.tangents.is_some()) {
+        library.not_carried.push("tangents (a primitive has no TANGENT)".into());
+    }
     let keep_skin = library.rig.is_some() && parts.iter().all(|p| p.joints.is_some());
     if !keep_skin && library.rig.take().is_some() {
         library.not_carried.push("skins and animations (a primitive has no JOINTS_0 and WEIGHTS_0)".into());
@@ -689,14 +702,14 @@ fn merge(parts: Vec<Part>, library: MaterialLibrary, path: &Path) -> Result<Mesh
         if let (Some(all), Some(these)) = (&mut corners.tangents, part.tangents) {
             all.extend(these);
         }
-        if let (Some(all), Some(these)) = (&mut corners.uvs, part.uvs) {
-            all.extend(these);
+        if let Some(all) = &mut corners.uvs {
+            all.extend(part.uvs.unwrap_or_else(|| vec![[0.0; 2]; 3 * part.triangles.len()]));
         }
-        if let (Some(all), Some(these)) = (&mut corners.uvs1, part.uvs1) {
-            all.extend(these);
+        if let Some(all) = &mut corners.uvs1 {
+            all.extend(part.uvs1.unwrap_or_else(|| vec![[0.0; 2]; 3 * part.triangles.len()]));
         }
-        if let (Some(all), Some(these)) = (&mut corners.colors, part.colors) {
-            all.extend(these);
+        if let Some(all) = &mut corners.colors {
+            all.extend(part.colors.unwrap_or_else(|| vec![[1.0; 4]; 3 * part.triangles.len()]));
         }
         if let (Some(all), Some(these)) = (&mut corners.joints, part.joints) {
             all.extend(these);

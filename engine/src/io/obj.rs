@@ -19,6 +19,9 @@ use super::triangulate::triangulate_polygon;
 use crate::error::MeshError;
 use crate::mesh::{CornerAttributes, Mesh, NO_MATERIAL};
 
+/// A corner without a texture coordinate (in the per-corner index list).
+const NO_VALUE: i64 = -1;
+
 /// One polygon corner as written in the file, resolved to 0-based indices.
 #[derive(Clone, Copy)]
 struct Corner {
@@ -89,7 +92,7 @@ pub fn read_obj(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadL
     let mut triangles: Vec<[u32; 3]> = Vec::new();
     let mut corner_uv: Vec<i64> = Vec::new();
     let mut corner_normal: Vec<i64> = Vec::new();
-    let mut all_have_uv = true;
+    let mut uv_corners = 0;
     let mut all_have_normal = true;
     // Line of each triangle, to name it when a forward reference turns out to be out of range.
     let mut triangle_lines: Vec<u32> = Vec::new();
@@ -178,10 +181,9 @@ pub fn read_obj(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadL
                                 format!("vertex index {} too large", c.position + 1),
                             )
                         })?;
-                        match c.uv {
-                            Some(i) => corner_uv.push(i),
-                            None => all_have_uv = false,
-                        }
+                        // (A corner without one is marked: see the texture coordinates below.)
+                        corner_uv.push(c.uv.unwrap_or(NO_VALUE));
+                        uv_corners += c.uv.is_some() as usize;
                         match c.normal {
                             Some(i) => corner_normal.push(i),
                             None => all_have_normal = false,
@@ -218,7 +220,7 @@ pub fn read_obj(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadL
         }
     }
     let lookup = |indices: &[i64], table_len: usize, what: &str| -> Result<(), MeshError> {
-        if let Some((k, &i)) = indices.iter().enumerate().find(|&(_, &i)| i as usize >= table_len) {
+        if let Some((k, &i)) = indices.iter().enumerate().find(|&(_, &i)| i != NO_VALUE && i as usize >= table_len) {
             return Err(MeshError::parse(
                 path,
                 format!("line {}", triangle_lines[k / 3]),
@@ -228,27 +230,26 @@ pub fn read_obj(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadL
         Ok(())
     };
     let mut corners = CornerAttributes::default();
-    if all_have_uv && !triangles.is_empty() {
+    // Texture coordinates on some faces only: the others get zero, as a glTF primitive without
+    // them beside one with them does (such a face has no texture to sample; dropping them all
+    // would take the texture from the faces that have one).
+    if uv_corners > 0 {
         lookup(&corner_uv, uvs.len(), "texture coordinate")?;
-        corners.uvs = Some(corner_uv.iter().map(|&i| uvs[i as usize]).collect());
+        corners.uvs = Some(corner_uv.iter().map(|&i| if i == NO_VALUE { [0.0; 2] } else { uvs[i as usize] }).collect());
     }
     if all_have_normal && !triangles.is_empty() {
         lookup(&corner_normal, normals.len(), "normal")?;
         corners.normals = Some(corner_normal.iter().map(|&i| normals[i as usize]).collect());
     }
-    // Values on some faces and not on others: a mesh carries an attribute at every corner or at
-    // none, so they are left out, and said (the warnings of every command that writes a result).
+    // Normals on some faces and not on others are left out (faces without them are drawn flat,
+    // which per-corner values could hold but the simplifier could then not move), and said (the
+    // warnings of every command that writes a result).
     let corner_count = 3 * triangles.len();
-    let partial = |given: usize, what: &str| {
-        (given > 0 && given < corner_count).then(|| format!("{what} (given at {given} of {corner_count} face corners)"))
-    };
-    let not_carried: Vec<String> = [
-        partial(if all_have_uv { 0 } else { corner_uv.len() }, "texture coordinates"),
-        partial(if all_have_normal { 0 } else { corner_normal.len() }, "normals"),
-    ]
-    .into_iter()
-    .flatten()
-    .collect();
+    let partial = !all_have_normal && !corner_normal.is_empty();
+    let not_carried: Vec<String> = partial
+        .then(|| format!("normals (given at {} of {corner_count} face corners)", corner_normal.len()))
+        .into_iter()
+        .collect();
     if !material_names.is_empty() || !not_carried.is_empty() {
         let mut library = super::mtl::library(&material_names, &libraries, folder);
         library.not_carried = not_carried;
