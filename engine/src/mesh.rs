@@ -93,13 +93,31 @@ pub struct MaterialLibrary {
     pub extensions_used: Vec<String>,
     /// See `extensions_used`.
     pub extensions_required: Vec<String>,
-    /// What the input had that a mesh does not carry (morph targets, tangents, second texture
-    /// coordinates, point and line primitives, a skeleton that cannot be kept), named for the
+    /// What the input had that a mesh does not carry (morph targets, normals that only some
+    /// primitives have, point and line primitives beside a skin, a skeleton that cannot be kept), named for the
     /// warnings of every operation that writes a result.
     pub not_carried: Vec<String>,
     /// The skeleton and animations of a skinned asset, when the mesh carries its joints and
     /// weights.
     pub rig: Option<Rig>,
+    /// The input's point and line primitives, written back beside the triangles as they were.
+    pub other_primitives: Vec<OtherPrimitive>,
+}
+
+/// A glTF point or line primitive (POINTS, LINES, LINE_LOOP, LINE_STRIP: not surface, so not
+/// simplified or refined), carried as it was: its positions placed in the world as the mesh's are
+/// (normals and tangents turned with them) and stored as floats, as are its texture coordinates and
+/// colours; its other attributes and its indices with their data as it was.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OtherPrimitive {
+    /// glTF `mode`: 0 points, 1 lines, 2 line loop, 3 line strip.
+    pub mode: u32,
+    /// Its material: an index into the library's `materials`.
+    pub material: Option<u32>,
+    /// Its attributes by glTF name (`POSITION`, `COLOR_0`, ...), each an accessor with its data.
+    pub attributes: Vec<(String, RigAccessor)>,
+    /// Its indices, when it has them.
+    pub indices: Option<RigAccessor>,
 }
 
 /// A skinned glTF asset's node hierarchy, skin and animations, carried so that a glTF written
@@ -136,7 +154,7 @@ impl Rig {
     }
 }
 
-/// One accessor of a [`Rig`]: its JSON (`componentType`, `type`, `count`, `normalized`, `min`,
+/// One accessor of a [`Rig`] or an [`OtherPrimitive`]: its JSON (`componentType`, `type`, `count`, `normalized`, `min`,
 /// `max`, `name`; no `bufferView`, `byteOffset` or `sparse`) and its elements packed one after
 /// another.
 #[derive(Debug, Clone, PartialEq)]
@@ -180,6 +198,15 @@ impl CornerAttributes {
     pub fn not_carried_warning(&self) -> Option<String> {
         let list = &self.library.as_ref()?.not_carried;
         (!list.is_empty()).then(|| format!("the input's {} are not carried: the result has none", list.join(", ")))
+    }
+
+    /// What the input had that is carried as it was ([`MaterialLibrary::other_primitives`]): a
+    /// note, or `None` when there is none.
+    pub fn passed_through_note(&self) -> Option<String> {
+        let n = self.library.as_ref()?.other_primitives.len();
+        (n > 0).then(|| {
+            format!("the input's {n} point and line primitive(s) are carried as they were into a glTF result (only triangles are simplified or refined)")
+        })
     }
 }
 
@@ -500,6 +527,67 @@ impl CornerAttributes {
             };
             if let Some(reason) = reason {
                 return Err(MeshError::InvalidParameter { name: "material", reason });
+            }
+        }
+        if let Some(library) = &self.library {
+            for (i, other) in library.other_primitives.iter().enumerate() {
+                other.check(library.materials.len()).map_err(|reason| MeshError::InvalidParameter {
+                    name: "other_primitives",
+                    reason: format!("point or line primitive {i}: {reason}"),
+                })?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl OtherPrimitive {
+    /// Whether the primitive can be written as it is: a mode that is not surface, a material the
+    /// library has, each accessor's bytes its count of elements, every index below the count of
+    /// positions.
+    fn check(&self, materials: usize) -> Result<(), String> {
+        if self.mode > 3 {
+            return Err(format!("mode {} is not a point or line mode", self.mode));
+        }
+        if let Some(m) = self.material.filter(|&m| m as usize >= materials) {
+            return Err(format!("names material {m}; there are {materials}"));
+        }
+        let size = |a: &RigAccessor| -> Option<(usize, usize)> {
+            let components = match a.json.get("type")?.as_str()? {
+                "SCALAR" => 1,
+                "VEC2" => 2,
+                "VEC3" => 3,
+                "VEC4" => 4,
+                _ => return None,
+            };
+            let width = match a.json.get("componentType")?.as_u64()? {
+                5120 | 5121 => 1,
+                5122 | 5123 => 2,
+                5125 | 5126 => 4,
+                _ => return None,
+            };
+            Some((usize::try_from(a.json.get("count")?.as_u64()?).ok()?, components * width))
+        };
+        let mut positions = None;
+        for (name, a) in &self.attributes {
+            let (count, element) = size(a).ok_or_else(|| format!("{name}: an accessor glTF does not define"))?;
+            if count.checked_mul(element) != Some(a.bytes.len()) {
+                return Err(format!("{name}: {} bytes for {count} elements of {element}", a.bytes.len()));
+            }
+            if name == "POSITION" {
+                positions = Some(count);
+            }
+        }
+        let positions = positions.ok_or("no POSITION")?;
+        if let Some(indices) = &self.indices {
+            let (count, width) =
+                size(indices).filter(|&(_, w)| matches!(w, 1 | 2 | 4)).ok_or("indices of no integer type")?;
+            if count.checked_mul(width) != Some(indices.bytes.len()) {
+                return Err(format!("{} bytes of indices for {count}", indices.bytes.len()));
+            }
+            let value = |c: &[u8]| c.iter().rev().fold(0usize, |v, &b| (v << 8) | b as usize);
+            if let Some(bad) = indices.bytes.chunks_exact(width).map(value).find(|&i| i >= positions) {
+                return Err(format!("index {bad} is out of range ({positions} positions)"));
             }
         }
         Ok(())

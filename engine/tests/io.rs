@@ -659,3 +659,83 @@ fn gltf_primitives_with_different_attributes() {
     let warning = mesh.corners.not_carried_warning().expect("said");
     assert!(warning.contains("normals (a primitive has no NORMAL)"), "{warning}");
 }
+
+/// A glTF point or line primitive is not surface: it is carried as it was (its positions placed
+/// in the world as the triangles' are, its colours and texture coordinates as floats, its indices
+/// with their bytes), said, written back beside the triangles (on the quantization grid's frame
+/// too), and kept by a progressive mesh's file.
+#[test]
+fn gltf_point_and_line_primitives_are_carried_as_they_were() {
+    use meshlod_engine::io::{WriteOptions, write_gltf_with};
+    let mut bin = Vec::new();
+    for c in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0] {
+        bin.extend_from_slice(&c.to_le_bytes());
+    }
+    bin.extend_from_slice(&[255, 128, 0, 255, 0, 0, 255, 255]); // COLOR_0, normalised bytes
+    bin.extend_from_slice(&[255, 0, 0, 255]); // TEXCOORD_0, normalised bytes
+    bin.extend_from_slice(&[0, 1]); // indices
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":{},"uri":"{}"}}],
+        "bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":24}},
+                       {{"buffer":0,"byteOffset":60,"byteLength":8}},{{"buffer":0,"byteOffset":68,"byteLength":4}},
+                       {{"buffer":0,"byteOffset":72,"byteLength":2}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                     {{"bufferView":1,"componentType":5126,"count":2,"type":"VEC3","min":[0,0,1],"max":[1,1,1]}},
+                     {{"bufferView":2,"componentType":5121,"normalized":true,"count":2,"type":"VEC4"}},
+                     {{"bufferView":3,"componentType":5121,"normalized":true,"count":2,"type":"VEC2"}},
+                     {{"bufferView":4,"componentType":5121,"count":2,"type":"SCALAR"}}],
+        "materials":[{{"name":"wire"}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}},
+            {{"mode":1,"material":0,"attributes":{{"POSITION":1,"COLOR_0":2,"TEXCOORD_0":3}},"indices":4}}]}}],
+        "nodes":[{{"mesh":0,"translation":[10,0,0]}}],"scenes":[{{"nodes":[0]}}],"scene":0}}"#,
+        bin.len(),
+        data_uri(&bin)
+    );
+    let mesh = read_gltf(&json, "lines.gltf").unwrap();
+    assert_eq!(mesh.face_count(), 1);
+    let others = |m: &meshlod_engine::Mesh| m.corners.library.as_ref().unwrap().other_primitives.clone();
+    let read = others(&mesh);
+    assert_eq!(read.len(), 1);
+    let (line, attribute) =
+        (&read[0], |name: &str| read[0].attributes.iter().find(|(n, _)| n == name).unwrap().1.clone());
+    assert_eq!((line.mode, line.material), (1, Some(0)));
+    let floats =
+        |bytes: &[u8]| bytes.chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect::<Vec<_>>();
+    assert_eq!(floats(&attribute("POSITION").bytes), [10.0, 0.0, 1.0, 11.0, 1.0, 1.0], "placed by its node");
+    assert_eq!(attribute("POSITION").json["min"], serde_json::json!([10.0, 0.0, 1.0]));
+    assert_eq!(floats(&attribute("COLOR_0").bytes), [1.0, 128.0 / 255.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0]);
+    assert_eq!(floats(&attribute("TEXCOORD_0").bytes), [1.0, 0.0, 0.0, 1.0]);
+    assert_eq!(line.indices.as_ref().unwrap().bytes, [0, 1], "indices as they were");
+    let note = mesh.corners.passed_through_note().expect("said");
+    assert!(note.contains("1 point and line primitive"), "{note}");
+    // Written back as they were, beside the triangles; on the grid's frame when quantized.
+    for quantize in [false, true] {
+        let mut glb = Vec::new();
+        write_gltf_with(&mut glb, &mesh, true, None, &WriteOptions { quantize }).unwrap();
+        let back = read_mesh_bytes(&glb, None, Path::new("lines.glb"), &ReadLimits::default()).unwrap();
+        let again = others(&back);
+        assert_eq!(again.len(), 1);
+        let position = |p: &meshlod_engine::mesh::OtherPrimitive| {
+            floats(&p.attributes.iter().find(|(n, _)| n == "POSITION").unwrap().1.bytes)
+        };
+        let moved = position(&again[0]).iter().zip(position(line)).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+        assert!(moved < 1e-5, "quantize {quantize}: moved {moved}");
+        if !quantize {
+            assert_eq!(again, read, "the same primitive, bytes and all");
+        }
+    }
+    // A progressive mesh's file keeps them.
+    use meshlod_engine::simplify::{SimplifyOptions, simplify};
+    let options = SimplifyOptions { record_progressive: true, ..Default::default() };
+    let pm = simplify(&mesh, &options).unwrap().progressive.unwrap();
+    let decoded =
+        meshlod_engine::pm_format::decode(&meshlod_engine::pm_format::encode(&pm), Path::new("x.pm")).unwrap();
+    assert_eq!(others(decoded.base()), read);
+    // A primitive that names a material the library lacks is refused by name.
+    let mut bad = mesh.clone();
+    let mut library = bad.corners.library.as_deref().unwrap().clone();
+    library.other_primitives[0].material = Some(3);
+    bad.corners.library = Some(std::sync::Arc::new(library));
+    let e = bad.check().unwrap_err().to_string();
+    assert!(e.contains("point or line primitive 0: names material 3; there are 1"), "{e}");
+}

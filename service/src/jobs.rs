@@ -133,6 +133,7 @@ pub fn simplify(
         warnings: simplify_warnings(o)
             .into_iter()
             .chain(mesh.corners.not_carried_warning())
+            .chain(mesh.corners.passed_through_note())
             .chain((o.return_progressive && s.back_faces > 0).then(|| {
                 format!(
                     "{} back faces (a double-sided sheet modelled with two faces): the result has both sides, \
@@ -248,6 +249,7 @@ pub fn refine(
         warnings: lost_attributes(mesh, &result.mesh.corners.names(), "refinement")
             .into_iter()
             .chain(mesh.corners.not_carried_warning())
+            .chain(mesh.corners.passed_through_note())
             .collect(),
     };
     Ok((result, stats))

@@ -10,7 +10,7 @@
 //! What is left out is said. glTF splits a vertex wherever its attributes differ (seams,
 //! hard edges) and exporters often between primitives too: the cut is joined again
 //! ([`Mesh::join_cut_seams`]), so the surface is one piece with seams, not cut open.
-//! POINTS and LINES primitives are not surface and are left out.
+//! POINTS and LINES primitives are not surface: carried as they were (`super::gltf_other`).
 //!
 //! Untrusted input: every accessor and buffer view is checked against the bytes that back it
 //! before it is read, counts against the limits before anything is allocated from them, and
@@ -200,12 +200,14 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
     // Counts first, against the limits, before reading any data.
     let (mut vertices, mut corners) = (0u64, 0u64);
     for (mesh, _, _) in &instances {
-        for primitive in mesh.primitives().filter(|p| is_surface(p.mode())) {
+        for primitive in mesh.primitives() {
             let positions = primitive.get(&gltf::Semantic::Positions).ok_or_else(|| {
                 err(&format!("mesh {} primitive {}", mesh.index(), primitive.index()), "has no POSITION".into())
             })?;
             vertices += positions.count() as u64;
-            corners += primitive.indices().map_or(positions.count(), |a| a.count()) as u64;
+            if is_surface(primitive.mode()) {
+                corners += primitive.indices().map_or(positions.count(), |a| a.count()) as u64;
+            }
         }
     }
     limits.check_vertices(vertices, path)?;
@@ -223,6 +225,27 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
                 .map_err(|_| err(&at, "could not be read (malformed accessor data)".into()))?
                 .map_err(|reason| err(&at, reason))?;
             parts.push(part);
+        }
+    }
+    // Point and line primitives, carried as they were; not beside a skin, whose node would move
+    // them with joints they do not have.
+    let mut library = library;
+    let raw = raw_json(json).map_err(|reason| err("document", reason))?;
+    for (mesh, world, _) in &instances {
+        for primitive in mesh.primitives().filter(|p| !is_surface(p.mode())) {
+            let at = format!("mesh {} primitive {}", mesh.index(), primitive.index());
+            let beside_a_skin = "point and line primitives (beside a skin)";
+            if library.rig.is_some() {
+                if !library.not_carried.iter().any(|n| n == beside_a_skin) {
+                    library.not_carried.push(beside_a_skin.into());
+                }
+                continue;
+            }
+            let read = || super::gltf_other::read(&primitive, &raw, document, &buffers, world);
+            let other = std::panic::catch_unwind(std::panic::AssertUnwindSafe(read))
+                .map_err(|_| err(&at, "could not be read (malformed accessor data)".into()))?
+                .map_err(|reason| err(&at, reason))?;
+            library.other_primitives.push(other);
         }
     }
     merge(parts, library, path)
@@ -289,9 +312,6 @@ fn library(
     };
     for mesh in document.meshes() {
         for primitive in mesh.primitives() {
-            if !is_surface(primitive.mode()) {
-                note("point and line primitives".into());
-            }
             if primitive.morph_targets().next().is_some() {
                 note("morph targets".into());
             }
@@ -324,6 +344,7 @@ fn library(
         extensions_required,
         not_carried,
         rig,
+        other_primitives: Vec::new(),
     })
 }
 
@@ -350,27 +371,9 @@ fn rig(
             *value = k.into();
             return Ok(());
         }
-        let accessor = document.accessors().nth(index as usize).ok_or("an accessor that does not exist")?;
-        if accessor.sparse().is_some() {
-            return Err(format!("skins and animations (accessor {index} is sparse)"));
-        }
-        let element = accessor.size();
-        let mut bytes = vec![0u8; element * accessor.count()];
-        if let Some(view) = accessor.view() {
-            let stride = view.stride().unwrap_or(element);
-            let data = &buffers[view.buffer().index()][view.offset()..view.offset() + view.length()];
-            for (i, chunk) in bytes.chunks_exact_mut(element).enumerate() {
-                let start = accessor.offset() + i * stride;
-                chunk.copy_from_slice(&data[start..start + element]);
-            }
-        }
-        let mut json = raw["accessors"][index as usize].clone();
-        if let Some(object) = json.as_object_mut() {
-            for key in ["bufferView", "byteOffset", "sparse"] {
-                object.remove(key);
-            }
-        }
-        accessors.push(crate::mesh::RigAccessor { json, bytes });
+        let packed = super::gltf_other::packed(raw, document, buffers, index as usize)
+            .map_err(|reason| format!("skins and animations ({reason})"))?;
+        accessors.push(packed);
         carried.insert(index, accessors.len() - 1);
         *value = (accessors.len() - 1).into();
         Ok(())
@@ -595,7 +598,7 @@ fn read_primitive(
 /// texture coordinates in core glTF), converted to floats: normalised values to [0, 1] or [−1, 1]
 /// as glTF defines them, others as they are. `None` when the primitive stores it as floats (or
 /// not at all): the crate's reader reads those.
-fn quantized<const N: usize>(
+pub(super) fn quantized<const N: usize>(
     primitive: &gltf::Primitive,
     semantic: &gltf::Semantic,
     buffers: &[Vec<u8>],

@@ -26,7 +26,7 @@ use base64::Engine as _;
 use serde_json::{Value, json};
 
 use super::WriteOptions;
-use crate::mesh::{ImageSource, MaterialLibrary, Mesh, NO_MATERIAL};
+use crate::mesh::{ImageSource, MaterialLibrary, Mesh, NO_MATERIAL, OtherPrimitive};
 
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
@@ -304,6 +304,10 @@ pub fn write_gltf_with(
         }
     }
 
+    if let Some(library) = &corners.library {
+        add_other_primitives(&library.other_primitives, grid, &mut primitives, &mut accessors, &mut buffer);
+    }
+
     let mut document = json!({
         "asset": { "version": "2.0", "generator": concat!("meshlod ", env!("CARGO_PKG_VERSION")) },
         "scene": 0,
@@ -362,6 +366,73 @@ pub fn write_gltf_with(
             json!([{ "byteLength": length, "uri": format!("data:application/octet-stream;base64,{data}") }]);
         serde_json::to_writer_pretty(&mut out, &document).map_err(std::io::Error::other)?;
         out.write_all(b"\n")
+    }
+}
+
+/// Appends the input's point and line primitives ([`OtherPrimitive`]) to `primitives`, their
+/// accessors to `accessors` and their data to `buffer`, each element padded to a multiple of 4
+/// bytes as glTF aligns vertex attributes; their positions moved into the frame of the node's
+/// `grid` (origin, step) when the triangles' positions are on one.
+fn add_other_primitives(
+    others: &[OtherPrimitive],
+    grid: Option<([f32; 3], f32)>,
+    primitives: &mut Vec<Value>,
+    accessors: &mut Vec<Value>,
+    buffer: &mut Buffer,
+) {
+    for other in others {
+        let mut primitive = json!({ "mode": other.mode, "attributes": {} });
+        for (name, accessor) in &other.attributes {
+            let mut json = accessor.json.clone();
+            let mut bytes = accessor.bytes.clone();
+            if let (Some((origin, step)), "POSITION") = (grid, name.as_str()) {
+                let moved: Vec<[f32; 3]> = bytes
+                    .chunks_exact(12)
+                    .map(|c| {
+                        std::array::from_fn(|k| {
+                            (f32::from_le_bytes([c[4 * k], c[4 * k + 1], c[4 * k + 2], c[4 * k + 3]]) - origin[k])
+                                / step
+                        })
+                    })
+                    .collect();
+                let (mut min, mut max) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+                for p in &moved {
+                    for k in 0..3 {
+                        min[k] = min[k].min(p[k]);
+                        max[k] = max[k].max(p[k]);
+                    }
+                }
+                if !moved.is_empty() {
+                    (json["min"], json["max"]) = (json!(min), json!(max));
+                }
+                bytes = floats(moved.into_iter());
+            }
+            let count = json["count"].as_u64().unwrap_or(0) as usize;
+            let element = bytes.len().checked_div(count).unwrap_or(0);
+            let view = if element > 0 && !element.is_multiple_of(4) {
+                let stride = element.next_multiple_of(4);
+                let padded: Vec<u8> = bytes
+                    .chunks_exact(element)
+                    .flat_map(|c| c.iter().copied().chain(std::iter::repeat_n(0, stride - element)))
+                    .collect();
+                buffer.strided(&padded, stride)
+            } else {
+                buffer.view(&bytes, Some(ARRAY_BUFFER))
+            };
+            json["bufferView"] = json!(view);
+            accessors.push(json);
+            primitive["attributes"][name] = json!(accessors.len() - 1);
+        }
+        if let Some(indices) = &other.indices {
+            let mut json = indices.json.clone();
+            json["bufferView"] = json!(buffer.view(&indices.bytes, Some(ELEMENT_ARRAY_BUFFER)));
+            accessors.push(json);
+            primitive["indices"] = json!(accessors.len() - 1);
+        }
+        if let Some(material) = other.material {
+            primitive["material"] = json!(material);
+        }
+        primitives.push(primitive);
     }
 }
 

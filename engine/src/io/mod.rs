@@ -7,6 +7,7 @@
 
 mod gltf;
 mod gltf_checks;
+mod gltf_other;
 mod gltf_write;
 mod mtl;
 mod obj;
@@ -241,7 +242,10 @@ pub fn unwritten_warning(format: MeshFormat, mesh: &Mesh) -> Option<String> {
         MeshFormat::Ply => &["normal", "uv", "color"],
         _ => return None,
     };
-    let lost: Vec<&str> = mesh.corners.names().into_iter().filter(|n| !holds.contains(n)).collect();
+    let mut lost: Vec<&str> = mesh.corners.names().into_iter().filter(|n| !holds.contains(n)).collect();
+    if mesh.corners.library.as_ref().is_some_and(|l| !l.other_primitives.is_empty()) {
+        lost.push("point and line primitives");
+    }
     (!lost.is_empty())
         .then(|| format!("{format:?} has no place for the mesh's {}: write .glb to keep them", lost.join(", ")))
 }

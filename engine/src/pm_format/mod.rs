@@ -14,7 +14,9 @@ pub use grid::{Grid, Precision, Quantization};
 use std::collections::HashMap;
 
 use crate::error::MeshError;
-use crate::mesh::{CornerAttributes, Image, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL, Rig, RigAccessor};
+use crate::mesh::{
+    CornerAttributes, Image, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL, OtherPrimitive, Rig, RigAccessor,
+};
 use crate::pm::{Hole, NO_VERTEX, PmAttributes, ProgressiveMesh, SplitAttributes, StreamedSplit, faces_added};
 
 /// First four bytes of a `.pm` file.
@@ -418,21 +420,73 @@ fn library_to_json(library: &MaterialLibrary) -> serde_json::Value {
         "extensions_required": library.extensions_required,
         "not_carried": library.not_carried,
     });
-    // Only when there is one: a file without a skeleton is written as before skeletons were kept.
+    // Only when there is one: a file without a skeleton is written as before skeletons were kept
+    // (and without point and line primitives as before they were).
     if let Some(rig) = &library.rig {
         json["rig"] = rig_to_json(rig);
+    }
+    if !library.other_primitives.is_empty() {
+        let others = library.other_primitives.iter().map(|p| {
+            let attributes: Vec<serde_json::Value> = p
+                .attributes
+                .iter()
+                .map(|(name, a)| serde_json::json!({ "name": name, "accessor": accessor_to_json(a) }))
+                .collect();
+            serde_json::json!({
+                "mode": p.mode,
+                "material": p.material,
+                "attributes": attributes,
+                "indices": p.indices.as_ref().map(accessor_to_json),
+            })
+        });
+        json["other_primitives"] = others.collect();
     }
     json
 }
 
+/// A carried accessor as the `.pm` file keeps it: its JSON, its bytes in base64.
+fn accessor_to_json(a: &RigAccessor) -> serde_json::Value {
+    use base64::Engine as _;
+    serde_json::json!({ "json": a.json, "bytes": base64::engine::general_purpose::STANDARD.encode(&a.bytes) })
+}
+
+/// Reads [`accessor_to_json`]'s form back.
+fn accessor_from_json(entry: &serde_json::Value) -> Option<RigAccessor> {
+    use base64::Engine as _;
+    let bytes = base64::engine::general_purpose::STANDARD.decode(entry.get("bytes")?.as_str()?).ok()?;
+    Some(RigAccessor { json: entry.get("json")?.clone(), bytes })
+}
+
+/// Reads the point and line primitives of [`library_to_json`]'s form back.
+fn other_primitives_from_json(json: &serde_json::Value) -> Option<Vec<OtherPrimitive>> {
+    let Some(list) = json.get("other_primitives") else { return Some(Vec::new()) };
+    let mut out = Vec::new();
+    for entry in list.as_array()? {
+        let mut attributes = Vec::new();
+        for a in entry.get("attributes")?.as_array()? {
+            attributes.push((a.get("name")?.as_str()?.to_string(), accessor_from_json(a.get("accessor")?)?));
+        }
+        let indices = match entry.get("indices") {
+            None | Some(serde_json::Value::Null) => None,
+            Some(i) => Some(accessor_from_json(i)?),
+        };
+        let material = match entry.get("material") {
+            None | Some(serde_json::Value::Null) => None,
+            Some(m) => Some(u32::try_from(m.as_u64()?).ok()?),
+        };
+        out.push(OtherPrimitive {
+            mode: u32::try_from(entry.get("mode")?.as_u64()?).ok()?,
+            material,
+            attributes,
+            indices,
+        });
+    }
+    Some(out)
+}
+
 /// A [`Rig`] as the `.pm` file keeps it: glTF's JSON, each accessor's bytes in base64.
 fn rig_to_json(rig: &Rig) -> serde_json::Value {
-    use base64::Engine as _;
-    let accessors: Vec<serde_json::Value> = rig
-        .accessors
-        .iter()
-        .map(|a| serde_json::json!({ "json": a.json, "bytes": base64::engine::general_purpose::STANDARD.encode(&a.bytes) }))
-        .collect();
+    let accessors: Vec<serde_json::Value> = rig.accessors.iter().map(accessor_to_json).collect();
     serde_json::json!({
         "nodes": rig.nodes,
         "mesh_node": rig.mesh_node,
@@ -446,12 +500,10 @@ fn rig_to_json(rig: &Rig) -> serde_json::Value {
 
 /// Reads [`rig_to_json`]'s form back.
 fn rig_from_json(json: &serde_json::Value) -> Option<Rig> {
-    use base64::Engine as _;
     let array = |key: &str| json.get(key)?.as_array().cloned();
     let mut accessors = Vec::new();
     for entry in array("accessors")? {
-        let bytes = base64::engine::general_purpose::STANDARD.decode(entry.get("bytes")?.as_str()?).ok()?;
-        accessors.push(RigAccessor { json: entry.get("json")?.clone(), bytes });
+        accessors.push(accessor_from_json(&entry)?);
     }
     Some(Rig {
         nodes: array("nodes")?,
@@ -506,6 +558,7 @@ fn library_from_json(json: &serde_json::Value) -> Option<MaterialLibrary> {
             None | Some(serde_json::Value::Null) => None,
             Some(rig) => Some(rig_from_json(rig)?),
         },
+        other_primitives: other_primitives_from_json(json)?,
     })
 }
 
