@@ -42,6 +42,11 @@ validate() { node tools/gltf-validate/validate.js "$@"; }
 "$MESHLOD" simplify "$gltf_out/torus.obj" -o "$gltf_out/torus-10.gltf" --ratio 0.9 > /dev/null
 "$MESHLOD" convert "$gltf_out/torus.obj" "$gltf_out/torus-q.glb" --quantize
 validate "$gltf_out/torus.glb" "$gltf_out/torus-10.gltf" "$gltf_out/torus-q.glb"
+# A line primitive beside a triangle, carried as it was (with floats, and on the quantized grid).
+lines=engine/tests/fuzz-corpus/lines.gltf
+"$MESHLOD" convert "$lines" "$gltf_out/lines.glb" 2> /dev/null
+"$MESHLOD" convert "$lines" "$gltf_out/lines-q.glb" --quantize 2> /dev/null
+validate "$gltf_out/lines.glb" "$gltf_out/lines-q.glb"
 # Every textured asset and spot, simplified to 10% as GLB (and quantized, KHR_mesh_quantization), and
 # its progressive mesh refined back to the input as GLB: 0 errors of their own (an error the input
 # has too, such as an image missing from its folder, is reported as inherited).
