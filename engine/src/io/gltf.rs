@@ -230,7 +230,9 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
     // Point and line primitives, carried as they were; not beside a skin, whose node would move
     // them with joints they do not have.
     let mut library = library;
-    let raw = raw_json(json).map_err(|reason| err("document", reason))?;
+    let any_other = instances.iter().any(|(mesh, _, _)| mesh.primitives().any(|p| !is_surface(p.mode())));
+    let raw =
+        if any_other { raw_json(json).map_err(|reason| err("document", reason))? } else { serde_json::Value::Null };
     for (mesh, world, _) in &instances {
         for primitive in mesh.primitives().filter(|p| !is_surface(p.mode())) {
             let at = format!("mesh {} primitive {}", mesh.index(), primitive.index());
