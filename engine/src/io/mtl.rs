@@ -201,7 +201,7 @@ fn place_image(
 }
 
 /// `text` on one line (an MTL statement ends at the line's end).
-fn one_line(text: &str) -> String {
+pub(super) fn one_line(text: &str) -> String {
     text.replace(['\n', '\r'], " ")
 }
 

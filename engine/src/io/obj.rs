@@ -318,7 +318,7 @@ pub(super) fn write_obj_with_library(out: &mut impl Write, mesh: &Mesh, mtllib: 
             && materials[3 * f] != NO_MATERIAL
         {
             material = materials[3 * f];
-            writeln!(out, "usemtl {}", library.material_name(material))?;
+            writeln!(out, "usemtl {}", super::mtl::one_line(&library.material_name(material)))?;
         }
         write!(out, "f")?;
         for (k, &v) in t.iter().enumerate() {
