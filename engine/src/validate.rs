@@ -52,6 +52,9 @@ pub struct MeshReport {
     /// Two-face edges whose faces carry different attributes at one of its ends (texture seams,
     /// hard normals, colour borders).
     pub seam_edges: usize,
+    /// glTF point and line primitives carried beside the triangles
+    /// ([`crate::mesh::MaterialLibrary::other_primitives`]).
+    pub point_and_line_primitives: usize,
 }
 
 /// Counts what a mesh has.
@@ -157,6 +160,7 @@ pub fn validate(mesh: &Mesh) -> MeshReport {
         euler_characteristic: referenced_count - topology.edges.len() as i64 + tris.len() as i64,
         attributes: mesh.corners.names(),
         seam_edges,
+        point_and_line_primitives: mesh.corners.library.as_ref().map_or(0, |l| l.other_primitives.len()),
     }
 }
 

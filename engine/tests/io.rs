@@ -708,6 +708,7 @@ fn gltf_point_and_line_primitives_are_carried_as_they_were() {
     assert_eq!(floats(&attribute("COLOR_0").bytes), [1.0, 128.0 / 255.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0]);
     assert_eq!(floats(&attribute("TEXCOORD_0").bytes), [1.0, 0.0, 0.0, 1.0]);
     assert_eq!(line.indices.as_ref().unwrap().bytes, [0, 1], "indices as they were");
+    assert_eq!(meshlod_engine::validate::validate(&mesh).point_and_line_primitives, 1);
     let note = mesh.corners.passed_through_note().expect("said");
     assert!(note.contains("1 point and line primitive"), "{note}");
     // Written back as they were, beside the triangles; on the grid's frame when quantized.
