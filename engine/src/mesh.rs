@@ -200,6 +200,12 @@ impl CornerAttributes {
         (!list.is_empty()).then(|| format!("the input's {} are not carried: the result has none", list.join(", ")))
     }
 
+    /// What every command that writes a result says of its input: [`Self::not_carried_warning`]
+    /// and [`Self::passed_through_note`].
+    pub fn input_warnings(&self) -> impl Iterator<Item = String> {
+        self.not_carried_warning().into_iter().chain(self.passed_through_note())
+    }
+
     /// What the input had that is carried as it was ([`MaterialLibrary::other_primitives`]): a
     /// note, or `None` when there is none.
     pub fn passed_through_note(&self) -> Option<String> {
@@ -531,63 +537,12 @@ impl CornerAttributes {
         }
         if let Some(library) = &self.library {
             for (i, other) in library.other_primitives.iter().enumerate() {
-                other.check(library.materials.len()).map_err(|reason| MeshError::InvalidParameter {
-                    name: "other_primitives",
-                    reason: format!("point or line primitive {i}: {reason}"),
+                crate::io::check_other_primitive(other, library.materials.len()).map_err(|reason| {
+                    MeshError::InvalidParameter {
+                        name: "other_primitives",
+                        reason: format!("point or line primitive {i}: {reason}"),
+                    }
                 })?;
-            }
-        }
-        Ok(())
-    }
-}
-
-impl OtherPrimitive {
-    /// Whether the primitive can be written as it is: a mode that is not surface, a material the
-    /// library has, each accessor's bytes its count of elements, every index below the count of
-    /// positions.
-    fn check(&self, materials: usize) -> Result<(), String> {
-        if self.mode > 3 {
-            return Err(format!("mode {} is not a point or line mode", self.mode));
-        }
-        if let Some(m) = self.material.filter(|&m| m as usize >= materials) {
-            return Err(format!("names material {m}; there are {materials}"));
-        }
-        let size = |a: &RigAccessor| -> Option<(usize, usize)> {
-            let components = match a.json.get("type")?.as_str()? {
-                "SCALAR" => 1,
-                "VEC2" => 2,
-                "VEC3" => 3,
-                "VEC4" => 4,
-                _ => return None,
-            };
-            let width = match a.json.get("componentType")?.as_u64()? {
-                5120 | 5121 => 1,
-                5122 | 5123 => 2,
-                5125 | 5126 => 4,
-                _ => return None,
-            };
-            Some((usize::try_from(a.json.get("count")?.as_u64()?).ok()?, components * width))
-        };
-        let mut positions = None;
-        for (name, a) in &self.attributes {
-            let (count, element) = size(a).ok_or_else(|| format!("{name}: an accessor glTF does not define"))?;
-            if count.checked_mul(element) != Some(a.bytes.len()) {
-                return Err(format!("{name}: {} bytes for {count} elements of {element}", a.bytes.len()));
-            }
-            if name == "POSITION" {
-                positions = Some(count);
-            }
-        }
-        let positions = positions.ok_or("no POSITION")?;
-        if let Some(indices) = &self.indices {
-            let (count, width) =
-                size(indices).filter(|&(_, w)| matches!(w, 1 | 2 | 4)).ok_or("indices of no integer type")?;
-            if count.checked_mul(width) != Some(indices.bytes.len()) {
-                return Err(format!("{} bytes of indices for {count}", indices.bytes.len()));
-            }
-            let value = |c: &[u8]| c.iter().rev().fold(0usize, |v, &b| (v << 8) | b as usize);
-            if let Some(bad) = indices.bytes.chunks_exact(width).map(value).find(|&i| i >= positions) {
-                return Err(format!("index {bad} is out of range ({positions} positions)"));
             }
         }
         Ok(())

@@ -306,8 +306,7 @@ fn convert(input: &Path, output: &Path, do_clean: bool, drop_attributes: bool, w
         mesh.corners = Default::default();
     }
     let unwritten = meshlod_engine::io::unwritten_warning(output_format(output)?, &mesh);
-    let notes = mesh.corners.not_carried_warning().into_iter().chain(mesh.corners.passed_through_note());
-    for warning in notes.chain(unwritten) {
+    for warning in mesh.corners.input_warnings().chain(unwritten) {
         eprintln!("meshlod: warning: {warning}");
     }
     if do_clean {

@@ -132,8 +132,7 @@ pub fn simplify(
         distance_term: s.distance_term,
         warnings: simplify_warnings(o)
             .into_iter()
-            .chain(mesh.corners.not_carried_warning())
-            .chain(mesh.corners.passed_through_note())
+            .chain(mesh.corners.input_warnings())
             .chain((o.return_progressive && s.back_faces > 0).then(|| {
                 format!(
                     "{} back faces (a double-sided sheet modelled with two faces): the result has both sides, \
@@ -248,8 +247,7 @@ pub fn refine(
         model_version,
         warnings: lost_attributes(mesh, &result.mesh.corners.names(), "refinement")
             .into_iter()
-            .chain(mesh.corners.not_carried_warning())
-            .chain(mesh.corners.passed_through_note())
+            .chain(mesh.corners.input_warnings())
             .collect(),
     };
     Ok((result, stats))

@@ -230,9 +230,8 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
     // Point and line primitives, carried as they were; not beside a skin, whose node would move
     // them with joints they do not have.
     let mut library = library;
-    let any_other = instances.iter().any(|(mesh, _, _)| mesh.primitives().any(|p| !is_surface(p.mode())));
-    let raw =
-        if any_other { raw_json(json).map_err(|reason| err("document", reason))? } else { serde_json::Value::Null };
+    // (The document's JSON, parsed again only for a primitive to carry.)
+    let mut raw = None;
     for (mesh, world, _) in &instances {
         for primitive in mesh.primitives().filter(|p| !is_surface(p.mode())) {
             let at = format!("mesh {} primitive {}", mesh.index(), primitive.index());
@@ -243,7 +242,11 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
                 }
                 continue;
             }
-            let read = || super::gltf_other::read(&primitive, &raw, document, &buffers, world);
+            let raw = match &mut raw {
+                Some(raw) => raw,
+                None => raw.insert(raw_json(json).map_err(|reason| err("document", reason))?),
+            };
+            let read = || super::gltf_other::read(&primitive, raw, document, &buffers, world);
             let other = std::panic::catch_unwind(std::panic::AssertUnwindSafe(read))
                 .map_err(|_| err(&at, "could not be read (malformed accessor data)".into()))?
                 .map_err(|reason| err(&at, reason))?;
@@ -453,7 +456,7 @@ fn is_surface(mode: Mode) -> bool {
 
 /// `Err` naming the first of `values` (an attribute `what`'s, per vertex) that is not a finite
 /// number.
-fn finite<const N: usize>(what: &str, values: &[[f32; N]]) -> Result<(), String> {
+pub(super) fn finite<const N: usize>(what: &str, values: &[[f32; N]]) -> Result<(), String> {
     match values.iter().position(|v| v.iter().any(|c| !c.is_finite())) {
         Some(vertex) => Err(format!("{what} of vertex {vertex} is not a finite number")),
         None => Ok(()),

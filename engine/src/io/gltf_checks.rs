@@ -96,7 +96,7 @@ pub(super) fn accessor(accessor: &gltf::Accessor, buffers: &[Vec<u8>]) -> Result
             .ok_or("its sparse indices lie outside their buffer")?;
         let mut previous = None;
         for (k, b) in bytes.chunks_exact(index_size).enumerate() {
-            let index = b.iter().rev().fold(0usize, |x, &byte| (x << 8) | usize::from(byte));
+            let index = unsigned_le(b);
             if index >= count {
                 return Err(format!("sparse index {k} is {index}, but the accessor has {count} elements"));
             }
@@ -173,4 +173,9 @@ pub(super) fn glb_header(bytes: &[u8]) -> Result<(), String> {
         return Err(format!("declares {declared} bytes, but the file holds {} (and the header 12)", bytes.len()));
     }
     Ok(())
+}
+
+/// An unsigned integer stored little-endian in `bytes` (at most 8 of them).
+pub(super) fn unsigned_le(bytes: &[u8]) -> usize {
+    bytes.iter().rev().fold(0usize, |x, &byte| (x << 8) | usize::from(byte))
 }

@@ -9,8 +9,9 @@ use glam::{DMat3, DMat4, DVec3};
 use gltf::Semantic;
 use serde_json::{Value, json};
 
-use super::gltf::quantized;
+use super::gltf::{finite, quantized};
 use super::gltf_checks as checks;
+use super::gltf_write;
 use crate::mesh::{OtherPrimitive, RigAccessor};
 
 /// Accessor `index`'s elements packed one after another, with its JSON (`bufferView`, `byteOffset`
@@ -47,23 +48,15 @@ pub(super) fn packed(
 /// Float values as a carried accessor, with their per-component minimum and maximum when `bounds`
 /// (glTF asks them of POSITION); `Err` naming the first value that is not a finite number.
 fn floats<const N: usize>(name: &str, values: Vec<[f32; N]>, bounds: bool) -> Result<RigAccessor, String> {
-    if let Some(vertex) = values.iter().position(|v| v.iter().any(|c| !c.is_finite())) {
-        return Err(format!("{name} of vertex {vertex} is not a finite number"));
-    }
+    finite(name, &values)?;
     let kind = ["SCALAR", "VEC2", "VEC3", "VEC4"][N - 1];
     let mut json = json!({ "componentType": 5126, "count": values.len(), "type": kind });
     if bounds && !values.is_empty() {
-        let (mut min, mut max) = ([f32::INFINITY; N], [f32::NEG_INFINITY; N]);
-        for v in &values {
-            for k in 0..N {
-                min[k] = min[k].min(v[k]);
-                max[k] = max[k].max(v[k]);
-            }
-        }
+        let (min, max) = gltf_write::bounds(&values);
         json["min"] = json!(min.to_vec());
         json["max"] = json!(max.to_vec());
     }
-    Ok(RigAccessor { json, bytes: values.iter().flatten().flat_map(|c| c.to_le_bytes()).collect() })
+    Ok(RigAccessor { json, bytes: gltf_write::floats(values.into_iter()) })
 }
 
 /// Point or line primitive `primitive`, placed by `world`; `raw`: the document's JSON.
@@ -145,4 +138,54 @@ pub(super) fn read(
         attributes,
         indices,
     })
+}
+
+/// Whether `other` can be written as it is: a mode that is not surface, a material the
+/// library has, each accessor's bytes its count of elements, every index below the count of
+/// positions.
+pub(crate) fn check(other: &OtherPrimitive, materials: usize) -> Result<(), String> {
+    if other.mode > 3 {
+        return Err(format!("mode {} is not a point or line mode", other.mode));
+    }
+    if let Some(m) = other.material.filter(|&m| m as usize >= materials) {
+        return Err(format!("names material {m}; there are {materials}"));
+    }
+    let size = |a: &RigAccessor| -> Option<(usize, usize)> {
+        let components = match a.json.get("type")?.as_str()? {
+            "SCALAR" => 1,
+            "VEC2" => 2,
+            "VEC3" => 3,
+            "VEC4" => 4,
+            _ => return None,
+        };
+        let width = match a.json.get("componentType")?.as_u64()? {
+            5120 | 5121 => 1,
+            5122 | 5123 => 2,
+            5125 | 5126 => 4,
+            _ => return None,
+        };
+        Some((usize::try_from(a.json.get("count")?.as_u64()?).ok()?, components * width))
+    };
+    let mut positions = None;
+    for (name, a) in &other.attributes {
+        let (count, element) = size(a).ok_or_else(|| format!("{name}: an accessor glTF does not define"))?;
+        if count.checked_mul(element) != Some(a.bytes.len()) {
+            return Err(format!("{name}: {} bytes for {count} elements of {element}", a.bytes.len()));
+        }
+        if name == "POSITION" {
+            positions = Some(count);
+        }
+    }
+    let positions = positions.ok_or("no POSITION")?;
+    if let Some(indices) = &other.indices {
+        let (count, width) =
+            size(indices).filter(|&(_, w)| matches!(w, 1 | 2 | 4)).ok_or("indices of no integer type")?;
+        if count.checked_mul(width) != Some(indices.bytes.len()) {
+            return Err(format!("{} bytes of indices for {count}", indices.bytes.len()));
+        }
+        if let Some(bad) = indices.bytes.chunks_exact(width).map(checks::unsigned_le).find(|&i| i >= positions) {
+            return Err(format!("index {bad} is out of range ({positions} positions)"));
+        }
+    }
+    Ok(())
 }

@@ -117,8 +117,20 @@ fn quantized_positions(positions: &[[f32; 3]], min: [f32; 3], max: [f32; 3]) -> 
     (bytes, qmin, qmax, step)
 }
 
-fn floats<const N: usize>(values: impl Iterator<Item = [f32; N]>) -> Vec<u8> {
+pub(super) fn floats<const N: usize>(values: impl Iterator<Item = [f32; N]>) -> Vec<u8> {
     values.flat_map(|v| v.into_iter().flat_map(f32::to_le_bytes)).collect()
+}
+
+/// The per-component minimum and maximum of `values` (infinities when there are none).
+pub(super) fn bounds<const N: usize>(values: &[[f32; N]]) -> ([f32; N], [f32; N]) {
+    let (mut min, mut max) = ([f32::INFINITY; N], [f32::NEG_INFINITY; N]);
+    for v in values {
+        for k in 0..N {
+            min[k] = min[k].min(v[k]);
+            max[k] = max[k].max(v[k]);
+        }
+    }
+    (min, max)
 }
 
 /// Writes `mesh` as glTF: GLB when `binary`, else JSON with a data-URI buffer. `folder`: where the
@@ -152,13 +164,7 @@ pub fn write_gltf_with(
 
     // Positions, with the exact min and max the validator checks.
     let positions: Vec<[f32; 3]> = (0..count).map(|i| mesh.positions[vertex(i)]).collect();
-    let (mut min, mut max) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-    for p in &positions {
-        for k in 0..3 {
-            min[k] = min[k].min(p[k]);
-            max[k] = max[k].max(p[k]);
-        }
-    }
+    let (min, max) = bounds(&positions);
     let position = if quantize && rig.is_none() && count > 0 {
         let (bytes, qmin, qmax, step) = quantized_positions(&positions, min, max);
         quantized = true;
@@ -395,14 +401,8 @@ fn add_other_primitives(
                         })
                     })
                     .collect();
-                let (mut min, mut max) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-                for p in &moved {
-                    for k in 0..3 {
-                        min[k] = min[k].min(p[k]);
-                        max[k] = max[k].max(p[k]);
-                    }
-                }
                 if !moved.is_empty() {
+                    let (min, max) = bounds(&moved);
                     (json["min"], json["max"]) = (json!(min), json!(max));
                 }
                 bytes = floats(moved.into_iter());

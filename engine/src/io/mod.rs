@@ -27,6 +27,7 @@ use crate::error::MeshError;
 use crate::mesh::Mesh;
 
 pub use gltf::read_gltf;
+pub(crate) use gltf_other::check as check_other_primitive;
 pub use gltf_write::{write_gltf, write_gltf_with};
 pub use obj::{read_obj, write_obj};
 pub use off::read_off;
