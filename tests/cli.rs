@@ -357,6 +357,11 @@ fn batch_runs_jobs_reports_each_and_resumes() {
     let dir = tempdir("batch");
     let input = dir.join("torus.obj");
     assert!(meshlod(&["generate", "torus", "-o", s(&input), "--resolution", "16"]).status.success());
+    // Textured: its OBJ output gets an MTL file and the texture beside it.
+    let torus = std::fs::read_to_string(&input).unwrap();
+    std::fs::write(&input, format!("mtllib torus.mtl\nusemtl skin\n{torus}")).unwrap();
+    std::fs::write(dir.join("torus.mtl"), "newmtl skin\nmap_Kd skin.png\n").unwrap();
+    std::fs::write(dir.join("skin.png"), b"\x89PNG\r\n\x1a\n").unwrap();
     let manifest = dir.join("jobs.jsonl");
     std::fs::write(
         &manifest,
@@ -383,6 +388,15 @@ fn batch_runs_jobs_reports_each_and_resumes() {
     // Resumable: up-to-date outputs are skipped, --force redoes them.
     assert!(run(&[]).iter().all(|r| r["status"] == "skipped"));
     assert!(run(&["--force"]).iter().all(|r| r["status"] == "ok"));
+    // A job whose OBJ has lost its texture is not up to date: it is run again, the texture back.
+    let texture = dir.join("out/skin.png");
+    assert!(dir.join("out/fine.mtl").is_file() && texture.is_file());
+    std::fs::remove_file(&texture).unwrap();
+    let mut statuses: Vec<(u64, String)> =
+        run(&[]).iter().map(|r| (r["line"].as_u64().unwrap(), r["status"].as_str().unwrap().to_string())).collect();
+    statuses.sort();
+    assert_eq!(statuses, [(1, "skipped".to_string()), (4, "ok".to_string())]);
+    assert!(texture.is_file());
     // A bad job is reported and fails the batch, without stopping the others.
     std::fs::write(&manifest, "{\"op\": \"simplify\", \"input\": \"missing.obj\", \"output\": \"x.ply\"}\n").unwrap();
     let out = meshlod(&["batch", s(&manifest), "--results", s(&results), "--quiet"]);

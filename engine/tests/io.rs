@@ -6,20 +6,9 @@ use meshlod_engine::io::{MeshFormat, ReadLimits, read_mesh, read_mesh_bytes, wri
 use meshlod_engine::{MeshError, procedural};
 
 mod common;
-use common::{assert_parse_error, obj, ply, tempdir};
+use common::{assert_parse_error, data_uri, obj, ply, read_gltf, tempdir};
 
 const SQUARE_OBJ: &str = "# square\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
-
-/// `bin` as a glTF buffer's data URI (base64, embedded).
-fn data_uri(bin: &[u8]) -> String {
-    use base64::Engine as _;
-    format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(bin))
-}
-
-/// A glTF document read as if from the file `name`.
-fn read_gltf(json: &str, name: &str) -> Result<meshlod_engine::Mesh, MeshError> {
-    read_mesh_bytes(json.as_bytes(), Some(MeshFormat::Gltf), Path::new(name), &ReadLimits::default())
-}
 
 #[test]
 fn obj_reads_polygons_negative_indices_and_corner_attributes() {
@@ -741,4 +730,36 @@ fn gltf_point_and_line_primitives_are_carried_as_they_were() {
     bad.corners.library = Some(std::sync::Arc::new(library));
     let e = bad.check().unwrap_err().to_string();
     assert!(e.contains("point or line primitive 0: names material 3; there are 1"), "{e}");
+}
+
+/// Two things glTF allows that the `gltf` crate's validation refuses: an application-specific
+/// attribute (`_BATCHID`, as 3D Tiles writes) and a primitive without POSITION (it draws
+/// nothing). The file is read, what is not carried said, and the result written as GLB reads back.
+#[test]
+fn gltf_custom_attributes_and_primitives_without_positions_are_read_and_said() {
+    let mut bin = Vec::new();
+    for c in [0f32, 0., 0., 1., 0., 0., 0., 1., 0., 7., 7., 7.] {
+        bin.extend_from_slice(&c.to_le_bytes());
+    }
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":{},"uri":"{}"}}],
+        "bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":12}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                     {{"bufferView":1,"componentType":5126,"count":3,"type":"SCALAR"}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"_BATCHID":1}}}},
+                                  {{"attributes":{{"_BATCHID":1}},"mode":0}}]}}]}}"#,
+        bin.len(),
+        data_uri(&bin)
+    );
+    let mesh = read_gltf(&json, "tiles.gltf").unwrap();
+    assert_eq!((mesh.face_count(), mesh.vertex_count()), (1, 3));
+    let warning = mesh.corners.not_carried_warning().expect("said");
+    assert!(warning.contains("_BATCHID values") && warning.contains("primitives without POSITION"), "{warning}");
+    let mut glb = Vec::new();
+    write_mesh_to(&mut glb, &mesh, MeshFormat::Gltf).unwrap();
+    let back = read_mesh_bytes(&glb, Some(MeshFormat::Gltf), Path::new("back.glb"), &ReadLimits::default()).unwrap();
+    assert_eq!((back.face_count(), back.positions), (1, mesh.positions));
+    // A POSITION that is there is still checked: one without its bounds is refused by name.
+    let e = read_gltf(&json.replace(r#","min":[0,0,0],"max":[1,1,0]"#, ""), "tiles.gltf").unwrap_err().to_string();
+    assert!(e.contains("POSITION") && e.contains("min"), "{e}");
 }

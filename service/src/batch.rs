@@ -85,11 +85,15 @@ fn read_manifest(manifest: &Path) -> Result<Vec<Entry>> {
     Ok(jobs)
 }
 
-/// Whether every output of a job exists and is newer than its input and the manifest.
+/// Whether every output of a job exists and is newer than its input and the manifest, and the
+/// files it refers to (an OBJ's MTL file and textures) are there.
 fn up_to_date(entry: &Entry, manifest: &Path) -> bool {
     let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
     let (Some(input), Some(manifest)) = (modified(entry.input()), modified(manifest)) else { return false };
-    entry.outputs().into_iter().all(|o| modified(o).is_some_and(|o| o >= input && o >= manifest))
+    entry.outputs().into_iter().all(|o| {
+        modified(o).is_some_and(|o| o >= input && o >= manifest)
+            && meshlod_engine::io::referenced_files(o).iter().all(|f| f.is_file())
+    })
 }
 
 fn run_job(entry: &Entry, executor: &dyn Executor) -> Result<serde_json::Value> {

@@ -585,8 +585,8 @@ Keys: op (simplify or refine), input, output, and optionally args: the command's
 command line (--json is implied). Any other key is an error. Relative paths, in input, output and in
 the path flags of args (--pm, --reference), are relative to the manifest's folder.
 
-A job whose outputs exist and are newer than its input and the manifest is skipped (--force redoes
-it), so an interrupted batch resumes; a failed job removes what it wrote, so it is never skipped.
+A job whose outputs exist and are newer than its input and the manifest, with the files they refer
+to (an OBJ's MTL file and textures), is skipped (--force redoes it), so an interrupted batch resumes; a failed job removes what it wrote, so it is never skipped.
 The batch exits non-zero if any job failed.";
 
 /// `meshlod batch` flags.

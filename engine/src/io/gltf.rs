@@ -98,7 +98,7 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
         let mut root = gltf.document.clone().into_json();
         root.extensions_required.retain(|e| e != QUANTIZATION);
         root.extensions_used.retain(|e| e != QUANTIZATION);
-        gltf.document = gltf::Document::from_json(root)?;
+        gltf.document = validated_document(root)?;
         Ok(gltf)
     };
     let gltf = std::panic::catch_unwind(|| validated(bytes))
@@ -201,9 +201,7 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
     let (mut vertices, mut corners) = (0u64, 0u64);
     for (mesh, _, _) in &instances {
         for primitive in mesh.primitives() {
-            let positions = primitive.get(&gltf::Semantic::Positions).ok_or_else(|| {
-                err(&format!("mesh {} primitive {}", mesh.index(), primitive.index()), "has no POSITION".into())
-            })?;
+            let Some(positions) = primitive.get(&gltf::Semantic::Positions) else { continue };
             vertices += positions.count() as u64;
             if is_surface(primitive.mode()) {
                 corners += primitive.indices().map_or(positions.count(), |a| a.count()) as u64;
@@ -215,7 +213,7 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
 
     let mut parts = Vec::new();
     for (mesh, world, _) in &instances {
-        for primitive in mesh.primitives().filter(|p| is_surface(p.mode())) {
+        for primitive in mesh.primitives().filter(|p| is_surface(p.mode()) && drawn(p)) {
             limits.check_cancel()?;
             let at = format!("mesh {} primitive {}", mesh.index(), primitive.index());
             // The checks above make the reads in range; a panic in the crate would still be a bug
@@ -233,7 +231,7 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
     // (The document's JSON, parsed again only for a primitive to carry.)
     let mut raw = None;
     for (mesh, world, _) in &instances {
-        for primitive in mesh.primitives().filter(|p| !is_surface(p.mode())) {
+        for primitive in mesh.primitives().filter(|p| !is_surface(p.mode()) && drawn(p)) {
             let at = format!("mesh {} primitive {}", mesh.index(), primitive.index());
             let beside_a_skin = "point and line primitives (beside a skin)";
             if library.rig.is_some() {
@@ -317,6 +315,9 @@ fn library(
     };
     for mesh in document.meshes() {
         for primitive in mesh.primitives() {
+            if !drawn(&primitive) {
+                note("primitives without POSITION (drawn by nothing)".into());
+            }
             if primitive.morph_targets().next().is_some() {
                 note("morph targets".into());
             }
@@ -447,6 +448,26 @@ fn data_uri(uri: &str) -> Option<Result<(&str, Vec<u8>), String>> {
         let bytes = base64::engine::general_purpose::STANDARD.decode(payload).map_err(|e| format!("data URI: {e}"))?;
         Ok((kind, bytes))
     }))
+}
+
+/// Whether a primitive has positions: glTF allows one without them, which draws nothing.
+fn drawn(primitive: &gltf::Primitive) -> bool {
+    primitive.get(&gltf::Semantic::Positions).is_some()
+}
+
+/// The crate's validation of `root` (every index refers to something that exists), less its one
+/// refusal of a valid document: a primitive without POSITION, which glTF allows (it draws nothing,
+/// and the reader passes over it, said).
+fn validated_document(root: gltf::json::Root) -> Result<gltf::Document, gltf::Error> {
+    use gltf::json::validation::{Error, Validate};
+    let mut errors = Vec::new();
+    root.validate(&root, gltf::json::Path::new, &mut |path, error| {
+        let path = path();
+        if !(matches!(error, Error::Missing) && path.as_str().ends_with(".attributes[\"POSITION\"]")) {
+            errors.push((path, error));
+        }
+    });
+    if errors.is_empty() { Ok(gltf::Document::from_json_without_validation(root)) } else { Err(gltf::Error::Validation(errors)) }
 }
 
 /// Whether a primitive mode describes a surface.

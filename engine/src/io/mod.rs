@@ -299,6 +299,17 @@ pub fn write_mesh(path: impl AsRef<Path>, mesh: &Mesh) -> Result<(), MeshError> 
     write_mesh_with(path, mesh, &WriteOptions::default())
 }
 
+/// The files beside `path` that a mesh file written there by [`write_mesh`] refers to and needs to
+/// draw as it was written: an OBJ's MTL files and their textures (a glTF's images are referred
+/// to where they were, not written). A tool that skips up-to-date outputs checks these too.
+pub fn referenced_files(path: impl AsRef<Path>) -> Vec<PathBuf> {
+    let path = path.as_ref();
+    match output_format(path) {
+        Ok(MeshFormat::Obj) => mtl::referenced_files(path),
+        _ => Vec::new(),
+    }
+}
+
 /// [`write_mesh`] with the [`WriteOptions`].
 pub fn write_mesh_with(path: impl AsRef<Path>, mesh: &Mesh, options: &WriteOptions) -> Result<(), MeshError> {
     let path = path.as_ref();

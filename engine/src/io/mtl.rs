@@ -9,7 +9,7 @@
 //! The same four statements are written.
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde_json::json;
 
@@ -131,6 +131,34 @@ pub(crate) fn write_library(path: &Path, library: &MaterialLibrary) -> std::io::
         }
     }
     std::fs::write(path, text)
+}
+
+/// The files an OBJ file refers to, as [`super::write_mesh`] writes them: the MTL files its
+/// `mtllib` statements name (before its first vertex) and the textures their `map_Kd` statements
+/// name, all in the OBJ's folder. Empty for an OBJ without materials or a file that cannot be read.
+pub(crate) fn referenced_files(obj: &Path) -> Vec<PathBuf> {
+    use std::io::BufRead as _;
+    let folder = obj.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let Ok(file) = std::fs::File::open(obj) else { return Vec::new() };
+    let mut files = Vec::new();
+    for line in std::io::BufReader::new(file).lines().map_while(Result::ok) {
+        let line = line.trim();
+        if let Some(name) = line.strip_prefix("mtllib ") {
+            files.push(folder.join(name.trim()));
+        } else if !line.is_empty() && !line.starts_with('#') {
+            break;
+        }
+    }
+    let mut textures = Vec::new();
+    for mtl in &files {
+        let small = std::fs::metadata(mtl).is_ok_and(|m| m.is_file() && m.len() <= MAX_MTL_BYTES);
+        if let Some(text) = small.then(|| std::fs::read(mtl).ok()).flatten() {
+            let folder = mtl.parent().unwrap_or(folder);
+            textures.extend(parse(&String::from_utf8_lossy(&text)).into_iter().filter_map(|e| Some(folder.join(e.texture?))));
+        }
+    }
+    files.extend(textures);
+    files
 }
 
 /// The name an MTL file in `folder` gives image `index` (see [`write_library`]), the image written

@@ -28,6 +28,17 @@ pub fn assert_parse_error(result: Result<Mesh, MeshError>, location: &str, needl
     }
 }
 
+/// `bin` as a glTF buffer's data URI (base64, embedded).
+pub fn data_uri(bin: &[u8]) -> String {
+    use base64::Engine as _;
+    format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(bin))
+}
+
+/// A glTF document read as if from the file `name`.
+pub fn read_gltf(json: &str, name: &str) -> Result<Mesh, MeshError> {
+    read_mesh_bytes(json.as_bytes(), Some(MeshFormat::Gltf), Path::new(name), &ReadLimits::default())
+}
+
 pub fn tempdir(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("meshlod-test-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
