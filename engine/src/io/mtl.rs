@@ -1,12 +1,17 @@
 //! Wavefront MTL material files, translated into glTF terms ([`MaterialLibrary`]) so that an OBJ
-//! written as glTF draws with its diffuse colour, opacity and diffuse texture, and written back
-//! from them beside an OBJ ([`write_library`]) so that an OBJ written from any input draws with its
-//! materials.
+//! written as glTF draws with its materials, and written back from them beside an OBJ
+//! ([`write_library`]) so that an OBJ written from any input draws with its materials.
 //!
-//! Only what a textured LOD needs is read: `newmtl`, `Kd`, `d` and `map_Kd` (its options skipped,
-//! the file name may hold spaces). `Tr` is not read: exporters disagree on whether it means
-//! transparency or opacity. A material named by `usemtl` but found in no MTL file keeps its name.
-//! The same four statements are written.
+//! Translated: `Kd`, `d` and `map_Kd` (base colour, opacity, base-colour texture), `Ke` and
+//! `map_Ke` (emission), `norm` (normal map; `-bm` its scale). Texture statements take their options
+//! as they come and a file name that may hold spaces. The other statements without a file (`Ka`,
+//! `Ks`, `Ns`, `illum`, `Tr`, ...) are kept as they were in the material's `extras.mtl`, and
+//! written back as they were: an OBJ's LOD keeps its whole material. The other texture
+//! statements (`map_Ks`, `map_Bump`, `bump`, `disp`, ...) are not carried, said: `map_Bump` is a
+//! height map to some exporters and a normal map to others. `Tr` is not translated (exporters
+//! disagree on whether it means transparency or opacity). A material named by `usemtl` but found
+//! in no MTL file keeps its name. The translated statements are written from any input's
+//! materials, glTF's among them.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -25,6 +30,14 @@ struct Entry {
     diffuse: Option<[f64; 3]>,
     opacity: Option<f64>,
     texture: Option<String>,
+    emissive: Option<[f64; 3]>,
+    emissive_texture: Option<String>,
+    /// The normal map's file and its `-bm` scale.
+    normal_texture: Option<(String, Option<f64>)>,
+    /// The statements without a file that are not translated, as they were.
+    kept: Vec<String>,
+    /// The keywords of the texture statements that are not carried.
+    dropped: Vec<String>,
 }
 
 /// The materials `names` (in `usemtl` order) as found in the `mtllib` files `libraries`, looked
@@ -50,6 +63,14 @@ pub(crate) fn library(names: &[String], libraries: &[String], folder: Option<&Pa
     }
     let mut library = MaterialLibrary::default();
     let mut texture_files: Vec<String> = Vec::new();
+    let mut texture = |file: &String| {
+        let index = texture_files.iter().position(|f| f == file).unwrap_or_else(|| {
+            texture_files.push(file.clone());
+            texture_files.len() - 1
+        });
+        json!({ "index": index })
+    };
+    let mut dropped: Vec<String> = Vec::new();
     for name in names {
         let entry = entries
             .iter()
@@ -65,17 +86,38 @@ pub(crate) fn library(names: &[String], libraries: &[String], folder: Option<&Pa
             "roughnessFactor": 1.0,
         });
         if let Some(file) = &entry.texture {
-            let index = texture_files.iter().position(|f| f == file).unwrap_or_else(|| {
-                texture_files.push(file.clone());
-                texture_files.len() - 1
-            });
-            pbr["baseColorTexture"] = json!({ "index": index });
+            pbr["baseColorTexture"] = texture(file);
         }
         let mut material = json!({ "name": entry.name, "pbrMetallicRoughness": pbr });
         if opacity < 1.0 {
             material["alphaMode"] = json!("BLEND");
         }
+        // An emissive texture without `Ke` is drawn as it is (glTF multiplies it by the factor).
+        let emissive = entry.emissive.or(entry.emissive_texture.as_ref().map(|_| [1.0; 3]));
+        if let Some(e) = emissive.filter(|e| e.iter().any(|&c| c > 0.0)) {
+            material["emissiveFactor"] = json!(e.map(|c| c.clamp(0.0, 1.0)));
+        }
+        if let Some(file) = &entry.emissive_texture {
+            material["emissiveTexture"] = texture(file);
+        }
+        if let Some((file, scale)) = &entry.normal_texture {
+            material["normalTexture"] = texture(file);
+            if let Some(scale) = scale {
+                material["normalTexture"]["scale"] = json!(scale);
+            }
+        }
+        if !entry.kept.is_empty() {
+            material["extras"] = json!({ "mtl": entry.kept });
+        }
+        for keyword in entry.dropped {
+            if !dropped.contains(&keyword) {
+                dropped.push(keyword);
+            }
+        }
         library.materials.push(material);
+    }
+    if !dropped.is_empty() {
+        library.not_carried.push(format!("MTL texture statements {}", dropped.join(", ")));
     }
     for (index, file) in texture_files.iter().enumerate() {
         library.textures.push(json!({ "source": index }));
@@ -94,40 +136,65 @@ pub(crate) fn library(names: &[String], libraries: &[String], folder: Option<&Pa
 }
 
 /// Writes `library`'s materials as the MTL file `path`: per material its name (as `usemtl` names
-/// it), `Kd` and `d` from its base colour, and `map_Kd` for its base-colour texture. Each such image
-/// is put beside the file so that the OBJ draws without the input's folder: an image file already
-/// in that folder is named as it is; one elsewhere, or one held in memory (from a GLB or a data
-/// URI), is written there under its own name (`STEM_NAME` where a different file has that name,
-/// `STEM` the MTL file's stem); one that cannot be read is named by its path relative to the
-/// folder, as the input had it.
+/// it), `Kd` and `d` from its base colour, `map_Kd` for its base-colour texture, `Ke` and `map_Ke`
+/// for its emission, `norm` for its normal map, and the statements an MTL input had that are not
+/// translated (its `extras.mtl`). Each such image is put beside the file so that the OBJ draws
+/// without the input's folder: an image file already in that folder is named as it is; one
+/// elsewhere, or one held in memory (from a GLB or a data URI), is written there under its own
+/// name (`STEM_NAME` where a different file has that name, `STEM` the MTL file's stem); one that
+/// cannot be read is named by its path relative to the folder, as the input had it.
 pub(crate) fn write_library(path: &Path, library: &MaterialLibrary) -> std::io::Result<()> {
     let folder = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let stem = path.file_stem().map_or("materials".into(), |s| s.to_string_lossy().into_owned());
     let mut placed: Vec<Option<String>> = vec![None; library.images.len()];
     let mut written: Vec<String> = Vec::new();
     let mut text = String::from("# meshlod\n");
+    let finite = |v: &serde_json::Value| v.as_f64().filter(|x| x.is_finite());
     for (index, material) in library.materials.iter().enumerate() {
+        // The file name the MTL gives the image of texture reference `info`, the image placed.
+        let mut image_of = |info: &serde_json::Value| -> std::io::Result<Option<String>> {
+            let Some(i) = info["index"]
+                .as_u64()
+                .and_then(|t| library.textures.get(t as usize))
+                .and_then(|t| t["source"].as_u64())
+                .map(|i| i as usize)
+                .filter(|&i| i < library.images.len())
+            else {
+                return Ok(None);
+            };
+            if placed[i].is_none() {
+                placed[i] = Some(place_image(folder, &stem, i, &library.images[i], &mut written)?);
+            }
+            Ok(placed[i].clone())
+        };
         // (Writing to a String cannot fail.)
         let _ = writeln!(text, "\nnewmtl {}", one_line(&library.material_name(index as u32)));
         let pbr = &material["pbrMetallicRoughness"];
-        let factor = |k: usize| pbr["baseColorFactor"][k].as_f64().filter(|x| x.is_finite()).unwrap_or(1.0);
+        let factor = |k: usize| finite(&pbr["baseColorFactor"][k]).unwrap_or(1.0);
         let _ = writeln!(text, "Kd {} {} {}", factor(0), factor(1), factor(2));
         if factor(3) < 1.0 {
             let _ = writeln!(text, "d {}", factor(3));
         }
-        let image = pbr["baseColorTexture"]["index"]
-            .as_u64()
-            .and_then(|t| library.textures.get(t as usize))
-            .and_then(|t| t["source"].as_u64())
-            .map(|i| i as usize)
-            .filter(|&i| i < library.images.len());
-        if let Some(i) = image {
-            if placed[i].is_none() {
-                placed[i] = Some(place_image(folder, &stem, i, &library.images[i], &mut written)?);
+        if let Some(name) = image_of(&pbr["baseColorTexture"])? {
+            let _ = writeln!(text, "map_Kd {name}");
+        }
+        let emissive = [0, 1, 2].map(|k| finite(&material["emissiveFactor"][k]).unwrap_or(0.0));
+        if emissive.iter().any(|&c| c > 0.0) {
+            let _ = writeln!(text, "Ke {} {} {}", emissive[0], emissive[1], emissive[2]);
+        }
+        if let Some(name) = image_of(&material["emissiveTexture"])? {
+            let _ = writeln!(text, "map_Ke {name}");
+        }
+        let normal = &material["normalTexture"];
+        if let Some(name) = image_of(normal)? {
+            match finite(&normal["scale"]).filter(|&s| s != 1.0) {
+                Some(scale) => writeln!(text, "norm -bm {scale} {name}"),
+                None => writeln!(text, "norm {name}"),
             }
-            if let Some(name) = &placed[i] {
-                let _ = writeln!(text, "map_Kd {name}");
-            }
+            .ok();
+        }
+        for line in material["extras"]["mtl"].as_array().into_iter().flatten().filter_map(|l| l.as_str()) {
+            let _ = writeln!(text, "{}", one_line(line));
         }
     }
     std::fs::write(path, text)
@@ -247,33 +314,56 @@ fn parse(text: &str) -> Vec<Entry> {
         }
         let Some(entry) = entries.last_mut() else { continue };
         let numbers: Vec<f64> = tokens.map_while(|t| t.parse::<f64>().ok()).filter(|x| x.is_finite()).collect();
+        let colour = (numbers.len() >= 3).then(|| [numbers[0], numbers[1], numbers[2]]);
         match keyword {
-            "Kd" if numbers.len() >= 3 => entry.diffuse = Some([numbers[0], numbers[1], numbers[2]]),
+            "Kd" if colour.is_some() => entry.diffuse = colour,
             "d" if !numbers.is_empty() => entry.opacity = Some(numbers[0]),
             "map_Kd" => entry.texture = texture_file(rest),
-            _ => {}
+            "Ke" if colour.is_some() => entry.emissive = colour,
+            "map_Ke" => entry.emissive_texture = texture_file(rest),
+            "norm" => entry.normal_texture = texture_file(rest).map(|file| (file, bump_scale(rest))),
+            // (Translated statements the translation cannot read: a spectral curve, a colour
+            // given as XYZ.)
+            "Kd" | "d" | "Ke" => {}
+            _ if keyword.starts_with('#') => {}
+            _ if keyword.to_ascii_lowercase().starts_with("map_")
+                || matches!(keyword, "bump" | "disp" | "decal" | "refl") =>
+            {
+                entry.dropped.push(keyword.to_string());
+            }
+            _ => entry.kept.push(line.to_string()),
         }
     }
     entries
 }
 
-/// The file name of a `map_*` statement: its options (`-o 0 0 0`, `-clamp on`, ...) skipped.
+/// A texture statement's `-bm` option (a bump or normal map's scale).
+fn bump_scale(rest: &str) -> Option<f64> {
+    let tokens: Vec<&str> = rest.split_ascii_whitespace().collect();
+    let at = tokens.iter().position(|&t| t == "-bm")?;
+    tokens.get(at + 1)?.parse::<f64>().ok().filter(|x| x.is_finite())
+}
+
+/// The file name of a texture statement: its options (`-o 0 0 0`, `-clamp on`, `-bm 0.5`, ...)
+/// skipped, each with the arguments the MTL format gives it (`-o`, `-s` and `-t` one to three
+/// numbers, `-mm` two, the others one), so that a name with spaces is kept whole.
 fn texture_file(rest: &str) -> Option<String> {
     let tokens: Vec<&str> = rest.split_ascii_whitespace().collect();
     let mut i = 0;
-    while i < tokens.len() && tokens[i].starts_with('-') {
+    while i < tokens.len() && tokens[i].starts_with('-') && tokens[i].len() > 1 {
+        let (least, most) = match tokens[i] {
+            "-o" | "-s" | "-t" => (1, 3),
+            "-mm" => (2, 2),
+            _ => (1, 1),
+        };
         i += 1;
-        // The option's arguments: numbers, or on/off, or one word for -imfchan / -type.
-        let words = matches!(tokens[i - 1], "-imfchan" | "-type" | "-bm");
-        while i < tokens.len()
-            && (tokens[i].parse::<f64>().is_ok()
-                || matches!(tokens[i], "on" | "off")
-                || (words && !tokens[i].contains('.')))
-        {
+        let mut taken = 0;
+        while taken < most && i < tokens.len() && (taken < least || tokens[i].parse::<f64>().is_ok()) {
             i += 1;
+            taken += 1;
         }
     }
-    let name = tokens[i..].join(" ");
+    let name = tokens.get(i..).unwrap_or_default().join(" ");
     (!name.is_empty()).then_some(name)
 }
 
@@ -283,12 +373,43 @@ mod tests {
 
     #[test]
     fn entries_keep_colour_opacity_and_texture() {
-        let entries = parse("newmtl a b\nKd 0.5 0.25 1\nd 0.5\nnewmtl tex\nmap_Kd -o 0.1 0.2 -clamp on my tex.png\n");
+        let entries = parse("newmtl a b\nKd 0.5 0.25 1\nd 0.5\nnewmtl tex\nmap_Kd -o 0.1 0.2 -clamp on -mm 0 1 -imfchan l my tex.png\n");
         assert_eq!(entries.len(), 2);
         assert_eq!(entries[0].name, "a b");
         assert_eq!(entries[0].diffuse, Some([0.5, 0.25, 1.0]));
         assert_eq!(entries[0].opacity, Some(0.5));
         assert_eq!(entries[1].texture.as_deref(), Some("my tex.png"));
+    }
+
+    /// Emission and normal maps are translated, the other statements without a file kept as they
+    /// were, the other texture statements said; written back, an MTL file says what it said, its
+    /// textures beside it.
+    #[test]
+    fn a_whole_material_goes_through_and_back() {
+        let dir = std::env::temp_dir().join(format!("meshlod-mtl-{}", std::process::id()));
+        let out = dir.join("out");
+        std::fs::create_dir_all(&out).unwrap();
+        let input = "newmtl hull\nKa 0.2 0.2 0.2\nKd 0.5 0.5 0.5\nKs 1 1 1\nNs 96\nillum 2\n\
+            Ke 0.25 0.5 0\nmap_Ke glow.png\nnorm -bm 0.5 normal map.png\nmap_Bump height.png\nmap_Ks spec.png\n";
+        std::fs::write(dir.join("in.mtl"), input).unwrap();
+        for file in ["glow.png", "normal map.png"] {
+            std::fs::write(dir.join(file), file.as_bytes()).unwrap();
+        }
+        let library = library(&["hull".into()], &["in.mtl".into()], Some(&dir));
+        let material = &library.materials[0];
+        assert_eq!(material["emissiveFactor"], json!([0.25, 0.5, 0.0]));
+        assert_eq!(material["emissiveTexture"]["index"], 0);
+        assert_eq!((&material["normalTexture"]["index"], &material["normalTexture"]["scale"]), (&json!(1), &json!(0.5)));
+        assert_eq!(material["extras"]["mtl"], json!(["Ka 0.2 0.2 0.2", "Ks 1 1 1", "Ns 96", "illum 2"]));
+        assert_eq!(library.not_carried, ["MTL texture statements map_Bump, map_Ks"]);
+        write_library(&out.join("lod.mtl"), &library).unwrap();
+        let back = std::fs::read_to_string(out.join("lod.mtl")).unwrap();
+        for line in ["Kd 0.5 0.5 0.5", "Ke 0.25 0.5 0", "map_Ke glow.png", "norm -bm 0.5 normal_map.png", "Ks 1 1 1", "illum 2"] {
+            assert!(back.lines().any(|l| l == line), "'{line}' in:\n{back}");
+        }
+        assert_eq!(std::fs::read(out.join("normal_map.png")).unwrap(), b"normal map.png");
+        assert!(out.join("glow.png").is_file() && !back.contains("map_Bump"));
+        std::fs::remove_dir_all(dir).unwrap();
     }
 
     #[test]
