@@ -613,6 +613,12 @@ fn progressive_meshes_carry_attributes_exactly() {
                     ImageSource::File(path) => std::fs::read(path).ok().map(ImageSource::Bytes),
                     other => Some(other.clone()),
                 };
+                // A file's bytes keep its name (an OBJ cut from the `.pm` names its texture so).
+                if let (ImageSource::File(path), ImageSource::Bytes(_)) = (&b.source, &a.source) {
+                    let file = path.file_name().map(|n| n.to_string_lossy().into_owned());
+                    let named = b.json["name"].as_str().filter(|n| !n.is_empty()).map(str::to_string).or(file);
+                    assert_eq!(a.json["name"].as_str().map(str::to_string), named, "{name}: the image's name");
+                }
                 match expected {
                     Some(e) => assert!(a.source == e, "{name}: an image changed through the file"),
                     None => assert!(matches!(a.source, ImageSource::Uri(_)), "{name}: a missing image kept by name"),

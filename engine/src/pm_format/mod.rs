@@ -400,6 +400,13 @@ fn library_to_json(library: &MaterialLibrary) -> serde_json::Value {
             match (&image.source, bytes) {
                 (_, Some(bytes)) => {
                     entry["bytes"] = base64::engine::general_purpose::STANDARD.encode(bytes).into();
+                    // An unnamed file's name goes with its bytes: an OBJ cut from the `.pm` names it.
+                    if let ImageSource::File(path) = &image.source
+                        && image.json.get("name").and_then(|n| n.as_str()).is_none_or(str::is_empty)
+                        && let (Some(name), Some(json)) = (path.file_name(), entry["json"].as_object_mut())
+                    {
+                        json.insert("name".into(), name.to_string_lossy().into_owned().into());
+                    }
                 }
                 (ImageSource::File(path), None) => {
                     let name = path.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
