@@ -467,7 +467,11 @@ fn validated_document(root: gltf::json::Root) -> Result<gltf::Document, gltf::Er
             errors.push((path, error));
         }
     });
-    if errors.is_empty() { Ok(gltf::Document::from_json_without_validation(root)) } else { Err(gltf::Error::Validation(errors)) }
+    if errors.is_empty() {
+        Ok(gltf::Document::from_json_without_validation(root))
+    } else {
+        Err(gltf::Error::Validation(errors))
+    }
 }
 
 /// Whether a primitive mode describes a surface.

@@ -221,7 +221,9 @@ pub(crate) fn referenced_files(obj: &Path) -> Vec<PathBuf> {
         let small = std::fs::metadata(mtl).is_ok_and(|m| m.is_file() && m.len() <= MAX_MTL_BYTES);
         if let Some(text) = small.then(|| std::fs::read(mtl).ok()).flatten() {
             let folder = mtl.parent().unwrap_or(folder);
-            textures.extend(parse(&String::from_utf8_lossy(&text)).into_iter().filter_map(|e| Some(folder.join(e.texture?))));
+            textures.extend(
+                parse(&String::from_utf8_lossy(&text)).into_iter().filter_map(|e| Some(folder.join(e.texture?))),
+            );
         }
     }
     files.extend(textures);
@@ -373,7 +375,9 @@ mod tests {
 
     #[test]
     fn entries_keep_colour_opacity_and_texture() {
-        let entries = parse("newmtl a b\nKd 0.5 0.25 1\nd 0.5\nnewmtl tex\nmap_Kd -o 0.1 0.2 -clamp on -mm 0 1 -imfchan l my tex.png\n");
+        let entries = parse(
+            "newmtl a b\nKd 0.5 0.25 1\nd 0.5\nnewmtl tex\nmap_Kd -o 0.1 0.2 -clamp on -mm 0 1 -imfchan l my tex.png\n",
+        );
         assert_eq!(entries.len(), 2);
         assert_eq!(entries[0].name, "a b");
         assert_eq!(entries[0].diffuse, Some([0.5, 0.25, 1.0]));
@@ -399,12 +403,17 @@ mod tests {
         let material = &library.materials[0];
         assert_eq!(material["emissiveFactor"], json!([0.25, 0.5, 0.0]));
         assert_eq!(material["emissiveTexture"]["index"], 0);
-        assert_eq!((&material["normalTexture"]["index"], &material["normalTexture"]["scale"]), (&json!(1), &json!(0.5)));
+        assert_eq!(
+            (&material["normalTexture"]["index"], &material["normalTexture"]["scale"]),
+            (&json!(1), &json!(0.5))
+        );
         assert_eq!(material["extras"]["mtl"], json!(["Ka 0.2 0.2 0.2", "Ks 1 1 1", "Ns 96", "illum 2"]));
         assert_eq!(library.not_carried, ["MTL texture statements map_Bump, map_Ks"]);
         write_library(&out.join("lod.mtl"), &library).unwrap();
         let back = std::fs::read_to_string(out.join("lod.mtl")).unwrap();
-        for line in ["Kd 0.5 0.5 0.5", "Ke 0.25 0.5 0", "map_Ke glow.png", "norm -bm 0.5 normal_map.png", "Ks 1 1 1", "illum 2"] {
+        for line in
+            ["Kd 0.5 0.5 0.5", "Ke 0.25 0.5 0", "map_Ke glow.png", "norm -bm 0.5 normal_map.png", "Ks 1 1 1", "illum 2"]
+        {
             assert!(back.lines().any(|l| l == line), "'{line}' in:\n{back}");
         }
         assert_eq!(std::fs::read(out.join("normal_map.png")).unwrap(), b"normal map.png");
