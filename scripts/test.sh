@@ -47,9 +47,10 @@ lines=engine/tests/fuzz-corpus/lines.gltf
 "$MESHLOD" convert "$lines" "$gltf_out/lines.glb" 2> /dev/null
 "$MESHLOD" convert "$lines" "$gltf_out/lines-q.glb" --quantize 2> /dev/null
 validate "$gltf_out/lines.glb" "$gltf_out/lines-q.glb"
-# Every textured asset and spot, simplified to 10% as GLB (and quantized, KHR_mesh_quantization), and
-# its progressive mesh refined back to the input as GLB: 0 errors of their own (an error the input
-# has too, such as an image missing from its folder, is reported as inherited).
+# Every textured asset and spot, simplified to 10% as GLB (and quantized, KHR_mesh_quantization),
+# its progressive mesh refined back to the input as GLB, and subdivided (`refine`, interpolated and
+# blended values): 0 errors of their own (an error the input has too, such as an image missing from
+# its folder, is reported as inherited).
 if [ -d "$MESHLOD_TEXTURED" ] && [ -f "$MESHLOD_MESHES/spot.obj" ]; then
   for input in "$MESHLOD_TEXTURED"/*/*.gltf "$MESHLOD_TEXTURED"/*/*.glb "$MESHLOD_TEXTURED"/*/*.obj \
     "$MESHLOD_MESHES/spot.obj"; do
@@ -59,7 +60,8 @@ if [ -d "$MESHLOD_TEXTURED" ] && [ -f "$MESHLOD_MESHES/spot.obj" ]; then
     # The finest level rebuilt from the progressive mesh, with its attributes and materials.
     "$MESHLOD" lod "$gltf_out/$name.pm" --vertices 100000000 -o "$gltf_out/$name-full.glb" > /dev/null
     "$MESHLOD" simplify "$input" -o "$gltf_out/$name-10q.glb" --ratio 0.9 --quantize > /dev/null
-    outputs=("$gltf_out/$name-10.glb" "$gltf_out/$name-full.glb" "$gltf_out/$name-10q.glb")
+    "$MESHLOD" refine "$input" -o "$gltf_out/$name-fine.glb" --etc 1 > /dev/null
+    outputs=("$gltf_out/$name-10.glb" "$gltf_out/$name-full.glb" "$gltf_out/$name-10q.glb" "$gltf_out/$name-fine.glb")
     case "$input" in
       *.gltf | *.glb) validate --input "$input" "${outputs[@]}" ;;
       *) validate "${outputs[@]}" ;;

@@ -102,6 +102,9 @@ pub struct MaterialLibrary {
     pub rig: Option<Rig>,
     /// The input's point and line primitives, written back beside the triangles as they were.
     pub other_primitives: Vec<OtherPrimitive>,
+    /// What the reader mended so that the result is valid glTF (weights that did not sum to 1),
+    /// said by every operation that writes a result.
+    pub mended: Vec<String>,
 }
 
 /// A glTF point or line primitive (POINTS, LINES, LINE_LOOP, LINE_STRIP: not surface, so not
@@ -187,6 +190,29 @@ pub enum ImageSource {
     Uri(String),
 }
 
+/// Scales a vertex's skin weights to sum to 1, as glTF requires (negative ones taken as 0): the
+/// sum taken in order in single precision, as the Khronos validator takes it, is then 1 within its
+/// tolerance (2e-7 per weight that is not 0). Whether they changed; weights that already sum to 1
+/// or have no positive one are left as they are.
+pub fn normalize_weights(w: &mut [f32; 4]) -> bool {
+    let sum = |w: &[f32; 4]| w.iter().fold(0f32, |s, &x| s + x);
+    let close = |w: &[f32; 4]| {
+        let tolerance = 2e-7 * w.iter().filter(|&&x| x != 0.0).count() as f64;
+        (sum(w) as f64 - 1.0).abs() <= tolerance && w.iter().all(|&x| x >= 0.0)
+    };
+    let total: f64 = w.iter().map(|&x| x.max(0.0) as f64).sum();
+    if close(w) || !(total > 0.0 && total.is_finite()) {
+        return false;
+    }
+    *w = w.map(|x| (x.max(0.0) as f64 / total) as f32);
+    if !close(w) {
+        // The rounding left on the largest weight.
+        let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
+        w[k] += 1.0 - sum(w);
+    }
+    true
+}
+
 /// Whether corners `a` and `b` carry the same value of an attribute (bit for bit), or it is absent.
 fn same_bits<const N: usize>(values: &Option<Vec<[f32; N]>>, a: usize, b: usize) -> bool {
     values.as_ref().is_none_or(|v| v[a].map(f32::to_bits) == v[b].map(f32::to_bits))
@@ -200,10 +226,11 @@ impl CornerAttributes {
         (!list.is_empty()).then(|| format!("the input's {} are not carried: the result has none", list.join(", ")))
     }
 
-    /// What every command that writes a result says of its input: [`Self::not_carried_warning`]
-    /// and [`Self::passed_through_note`].
+    /// What every command that writes a result says of its input: [`Self::not_carried_warning`],
+    /// [`Self::passed_through_note`] and what the reader mended ([`MaterialLibrary::mended`]).
     pub fn input_warnings(&self) -> impl Iterator<Item = String> {
-        self.not_carried_warning().into_iter().chain(self.passed_through_note())
+        let mended = self.library.as_ref().map(|l| l.mended.clone()).unwrap_or_default();
+        self.not_carried_warning().into_iter().chain(self.passed_through_note()).chain(mended)
     }
 
     /// What the input had that is carried as it was ([`MaterialLibrary::other_primitives`]): a

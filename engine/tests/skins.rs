@@ -9,8 +9,12 @@ use meshlod_engine::io::{MeshFormat, ReadLimits, read_mesh_bytes, write_mesh_to}
 
 /// A skinned strip of 4 triangles (a 2×3 grid of vertices) under a parent node that is moved by
 /// (5, 0, 0) — which a skinned mesh ignores — with a two-joint skin and an animation of one joint.
-/// `bad_joint` is written as the joint of the last vertex.
+/// `bad_joint` is written as the joint of the last vertex; `middle` as the weights of vertex 2.
 fn skinned_gltf(bad_joint: u16) -> String {
+    skinned_gltf_with(bad_joint, [0.5, 0.5, 0.0, 0.0])
+}
+
+fn skinned_gltf_with(bad_joint: u16, middle: [f32; 4]) -> String {
     let mut bin = Vec::new();
     let positions: [[f32; 3]; 6] = [[0., 0., 0.], [1., 0., 0.], [0., 1., 0.], [1., 1., 0.], [0., 2., 0.], [1., 2., 0.]];
     positions.iter().flatten().for_each(|c| bin.extend_from_slice(&c.to_le_bytes()));
@@ -19,14 +23,8 @@ fn skinned_gltf(bad_joint: u16) -> String {
     let joints: [[u16; 4]; 6] =
         [[0, 0, 0, 0], [0, 0, 0, 0], [0, 1, 0, 0], [0, 1, 0, 0], [1, 0, 0, 0], [bad_joint, 0, 0, 0]];
     joints.iter().flatten().for_each(|j| bin.extend_from_slice(&j.to_le_bytes())); // 96..144
-    let weights: [[f32; 4]; 6] = [
-        [1., 0., 0., 0.],
-        [1., 0., 0., 0.],
-        [0.5, 0.5, 0., 0.],
-        [0.5, 0.5, 0., 0.],
-        [1., 0., 0., 0.],
-        [1., 0., 0., 0.],
-    ];
+    let weights: [[f32; 4]; 6] =
+        [[1., 0., 0., 0.], [1., 0., 0., 0.], middle, [0.5, 0.5, 0., 0.], [1., 0., 0., 0.], [1., 0., 0., 0.]];
     weights.iter().flatten().for_each(|w| bin.extend_from_slice(&w.to_le_bytes())); // 144..240
     let identity: [f32; 16] = [1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1.];
     for _ in 0..2 {
@@ -116,7 +114,49 @@ fn simplified_and_refined_skins_stay_consistent() {
     let refined = meshlod_engine::refine::subdivide::subdivide_uniform(&mesh);
     refined.check().unwrap();
     for w in refined.corners.weights.as_ref().unwrap() {
-        assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-6, "{w:?}");
+        let sum = w.iter().fold(0f32, |s, &x| s + x) as f64;
+        assert!((sum - 1.0).abs() <= 2e-7 * w.iter().filter(|&&x| x != 0.0).count() as f64, "{w:?}");
+    }
+}
+
+/// Weights that do not sum to 1 (invalid glTF, as in the shared CesiumMan) are scaled to sum to 1
+/// when read, said; the sums the Khronos validator takes (in order, in single precision) are then
+/// within its tolerance, here and for arbitrary weights.
+#[test]
+fn weights_that_do_not_sum_to_one_are_mended_and_said() {
+    use meshlod_engine::mesh::normalize_weights;
+    let validator_sum_ok = |w: &[f32; 4]| {
+        let sum = w.iter().fold(0f32, |s, &x| s + x) as f64;
+        (sum - 1.0).abs() <= 2e-7 * w.iter().filter(|&&x| x != 0.0).count() as f64 && w.iter().all(|&x| x >= 0.0)
+    };
+    let mesh = read(&skinned_gltf_with(1, [0.25, 0.25, 0.0, 0.0])).unwrap();
+    let weights = mesh.corners.weights.as_ref().unwrap();
+    assert!(weights.iter().all(validator_sum_ok) && weights.contains(&[0.5, 0.5, 0.0, 0.0]), "{weights:?}");
+    let said: Vec<String> = mesh.corners.input_warnings().collect();
+    assert!(said.iter().any(|w| w.contains("WEIGHTS_0") && w.contains("at 1 vertices")), "{said:?}");
+    assert!(read(&skinned_gltf(1)).unwrap().corners.input_warnings().next().is_none(), "nothing to mend");
+    // Arbitrary weights (some zero, some negative): mended within the tolerance; valid ones kept.
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 40) as f32 / (1u64 << 24) as f32
+    };
+    for _ in 0..20_000 {
+        let mut w = [0.0; 4].map(|_| match next() {
+            x if x < 0.3 => 0.0,
+            x if x < 0.35 => -x,
+            _ => next() * 3.0,
+        });
+        let before = w;
+        let changed = normalize_weights(&mut w);
+        if before.iter().any(|&x| x > 0.0) {
+            assert!(validator_sum_ok(&w), "{before:?} → {w:?}");
+        }
+        assert_eq!(changed, w != before, "{before:?}");
+        let mut again = w;
+        assert!(!normalize_weights(&mut again) || !before.iter().any(|&x| x > 0.0), "{before:?}: stable");
     }
 }
 

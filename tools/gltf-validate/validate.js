@@ -6,7 +6,9 @@
 //
 // With --input, an output's error is inherited (not counted, listed as such) when the input has
 // an error with the same code at the same place, e.g. an image file missing from the input's
-// folder, which the output can only refer to.
+// folder, which the output can only refer to. An error about an accessor's data is inherited only
+// with the same message too (the same elements, the same values): the output's accessors hold its
+// own data.
 const fs = require("fs");
 const path = require("path");
 const validator = require("gltf-validator");
@@ -26,7 +28,7 @@ async function reportOf(file) {
   return report;
 }
 
-const key = (m) => `${m.code} ${m.pointer}`;
+const key = (m) => `${m.code} ${m.pointer}` + (m.code.startsWith("ACCESSOR_") ? ` ${m.message}` : "");
 
 async function validate(file, inherited) {
   const report = await reportOf(file);

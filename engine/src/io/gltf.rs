@@ -56,6 +56,8 @@ struct Part {
     colors: Option<Vec<[f32; 4]>>,
     joints: Option<Vec<[u16; 4]>>,
     weights: Option<Vec<[f32; 4]>>,
+    /// Vertices whose weights were scaled to sum to 1.
+    mended: usize,
     material: u32,
 }
 
@@ -351,6 +353,7 @@ fn library(
         not_carried,
         rig,
         other_primitives: Vec::new(),
+        mended: Vec::new(),
     })
 }
 
@@ -557,14 +560,14 @@ fn read_primitive(
         same_count("COLOR_0", v.len())?;
         finite("COLOR_0", v)?;
     }
-    let (mut joints, mut weights) = (None, None);
+    let (mut joints, mut weights, mut mended) = (None, None, 0);
     if joint_count > 0 {
         joints = reader.read_joints(0).map(|r| r.into_u16().collect::<Vec<[u16; 4]>>());
         weights = reader.read_weights(0).map(|r| r.into_f32().collect::<Vec<[f32; 4]>>());
-        if let (Some(j), Some(w)) = (&mut joints, &weights) {
+        if let (Some(j), Some(w)) = (&mut joints, &mut weights) {
             // A joint of weight zero moves nothing: it is read as joint 0, as glTF asks unused
             // entries to be, so that it neither splits a vertex nor draws a validator warning.
-            for (j, w) in j.iter_mut().zip(w) {
+            for (j, w) in j.iter_mut().zip(w.iter()) {
                 for k in 0..4 {
                     if w[k] == 0.0 {
                         j[k] = 0;
@@ -579,6 +582,7 @@ fn read_primitive(
                 return Err(format!("JOINTS_0 of vertex {vertex} names joint {bad}; the skin has {joint_count}"));
             }
             finite("WEIGHTS_0", w)?;
+            mended = w.iter_mut().map(|w| crate::mesh::normalize_weights(w) as usize).sum();
         } else {
             (joints, weights) = (None, None);
         }
@@ -621,7 +625,7 @@ fn read_primitive(
     let joints = joints.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let weights = weights.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let material = primitive.material().index().map_or(NO_MATERIAL, |m| m as u32);
-    Ok(Part { positions, triangles, normals, tangents, uvs, uvs1, colors, joints, weights, material })
+    Ok(Part { positions, triangles, normals, tangents, uvs, uvs1, colors, joints, weights, material, mended })
 }
 
 /// A primitive's attribute `semantic` when it is stored as integers (KHR_mesh_quantization, and
@@ -708,6 +712,12 @@ fn merge(parts: Vec<Part>, library: MaterialLibrary, path: &Path) -> Result<Mesh
     let keep_skin = library.rig.is_some() && parts.iter().all(|p| p.joints.is_some());
     if !keep_skin && library.rig.take().is_some() {
         library.not_carried.push("skins and animations (a primitive has no JOINTS_0 and WEIGHTS_0)".into());
+    }
+    let mended: usize = parts.iter().map(|p| p.mended).sum();
+    if keep_skin && mended > 0 {
+        library.mended.push(format!(
+            "the input's skin weights (WEIGHTS_0) summed to other than 1 at {mended} vertices: scaled to sum to 1, as glTF requires"
+        ));
     }
     let mut mesh = Mesh::default();
     let mut corners = CornerAttributes {

@@ -566,6 +566,8 @@ fn library_from_json(json: &serde_json::Value) -> Option<MaterialLibrary> {
             Some(rig) => Some(rig_from_json(rig)?),
         },
         other_primitives: other_primitives_from_json(json)?,
+        // (Said when the input was read; the file holds the mended values.)
+        mended: Vec::new(),
     })
 }
 

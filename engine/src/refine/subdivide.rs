@@ -334,12 +334,11 @@ fn blend_skin(joints: &[[u16; 4]], weights: &[[f32; 4]], (x, y): (usize, usize))
     }
     sum.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
     sum.truncate(4);
-    let total: f32 = sum.iter().map(|s| s.1).sum();
     let (mut j, mut w) = ([0u16; 4], [0f32; 4]);
     for (k, &(joint, weight)) in sum.iter().enumerate() {
-        j[k] = joint;
-        w[k] = if total > 0.0 { weight / total } else { 0.0 };
+        (j[k], w[k]) = (joint, weight);
     }
+    crate::mesh::normalize_weights(&mut w);
     (j, w)
 }
 
