@@ -540,7 +540,19 @@ fn add_library(
             document[key] = Value::Array(values);
         }
     };
-    put("materials", library.materials.clone());
+    // The MTL statements an OBJ input's materials keep for an OBJ output (`super::mtl`) are
+    // nothing to a glTF client: left out.
+    let materials = library.materials.iter().map(|m| {
+        let mut m = m.clone();
+        if let Some(extras) = m.get_mut("extras").and_then(Value::as_object_mut) {
+            extras.remove("mtl");
+            if extras.is_empty() {
+                m.as_object_mut().map(|o| o.remove("extras"));
+            }
+        }
+        m
+    });
+    put("materials", materials.collect());
     put("textures", library.textures.clone());
     put("samplers", library.samplers.clone());
     put("images", images);

@@ -6,7 +6,7 @@
 //! `map_Ke` (emission), `norm` (normal map; `-bm` its scale). Texture statements take their options
 //! as they come and a file name that may hold spaces. The other statements without a file (`Ka`,
 //! `Ks`, `Ns`, `illum`, `Tr`, ...) are kept as they were in the material's `extras.mtl`, and
-//! written back as they were: an OBJ's LOD keeps its whole material. The other texture
+//! written back as they were: an OBJ's LOD keeps its whole material (a glTF result leaves them out). The other texture
 //! statements (`map_Ks`, `map_Bump`, `bump`, `disp`, ...) are not carried, said: `map_Bump` is a
 //! height map to some exporters and a normal map to others. `Tr` is not translated (exporters
 //! disagree on whether it means transparency or opacity). A material named by `usemtl` but found
@@ -418,6 +418,14 @@ mod tests {
         }
         assert_eq!(std::fs::read(out.join("normal_map.png")).unwrap(), b"normal map.png");
         assert!(out.join("glow.png").is_file() && !back.contains("map_Bump"));
+        // A glTF result keeps the translation and leaves the MTL statements out.
+        let mut mesh = crate::procedural::icosphere(0);
+        mesh.corners.materials = Some(vec![0; 3 * mesh.face_count()]);
+        mesh.corners.library = Some(std::sync::Arc::new(library));
+        let mut text = Vec::new();
+        super::super::gltf_write::write_gltf(&mut text, &mesh, false, Some(&out)).unwrap();
+        let text = String::from_utf8(text).unwrap();
+        assert!(text.contains("emissiveTexture") && !text.contains("Ns 96") && !text.contains("extras"), "{text}");
         std::fs::remove_dir_all(dir).unwrap();
     }
 
