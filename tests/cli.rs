@@ -624,16 +624,17 @@ fn textured_gltf_assets_convert_to_obj_with_their_attributes() {
         }
     }
     fails_with(&["convert", s(&textured.join("draco__Duck/Duck.gltf")), s(&dir.join("duck.stl"))], "read only");
-    // What a result cannot carry is said: Duck, Lantern (its tangents carried) and CesiumMan (its
-    // skin and animations carried) have nothing left out, and a skinned result written as OBJ says
-    // what it lost.
+    // What a result cannot carry is said: CesiumMan (its skin and animations carried) has nothing
+    // left out, only its weights mended (a fifteenth of them do not sum to 1), and a skinned result
+    // written as OBJ says what it lost.
     let warnings = |asset: &str| {
         let out = dir.join("lod.glb");
         let report = ok_json(&["simplify", s(&textured.join(asset)), "-o", s(&out), "--ratio", "0.9", "--json"]);
         assert_eq!(report["placement"], "endpoint", "{asset}: texture coordinates keep vertices in place");
         report["warnings"].as_array().unwrap().iter().map(|w| w.as_str().unwrap().to_string()).collect::<Vec<_>>()
     };
-    assert_eq!(warnings("draco__CesiumMan/CesiumMan.gltf"), Vec::<String>::new());
+    let said = warnings("draco__CesiumMan/CesiumMan.gltf");
+    assert!(said.len() == 1 && said[0].contains("WEIGHTS_0") && said[0].contains("at 210 vertices"), "{said:?}");
     // A progressive mesh's bytes per split leave its materials and images out (Fox's texture is
     // most of its file).
     let (out, pm) = (dir.join("fox.glb"), dir.join("fox.pm"));
