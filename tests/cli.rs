@@ -635,6 +635,9 @@ fn textured_gltf_assets_convert_to_obj_with_their_attributes() {
     };
     let said = warnings("draco__CesiumMan/CesiumMan.gltf");
     assert!(said.len() == 1 && said[0].contains("WEIGHTS_0") && said[0].contains("at 210 vertices"), "{said:?}");
+    // `info` says the same before anything is written.
+    let info = ok_json(&["info", s(&textured.join("draco__CesiumMan/CesiumMan.gltf")), "--json"]);
+    assert_eq!(info["warnings"], serde_json::json!(said));
     // A progressive mesh's bytes per split leave its materials and images out (Fox's texture is
     // most of its file).
     let (out, pm) = (dir.join("fox.glb"), dir.join("fox.pm"));

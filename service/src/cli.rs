@@ -30,7 +30,8 @@ pub struct Cli {
 /// Every subcommand.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Print a validation report: counts, bounding box, degenerate/duplicate faces, manifoldness.
+    /// Print a validation report: counts, bounding box, degenerate/duplicate faces, manifoldness;
+    /// and, as warnings, what a result written from the file would not carry.
     Info {
         /// Mesh file (.obj, .ply, .stl, .off, .gltf or .glb).
         file: PathBuf,

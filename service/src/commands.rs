@@ -276,8 +276,16 @@ fn run_predict(executor: &dyn Executor, args: &PredictArgs) -> Result<()> {
 }
 
 fn info(file: &Path, json: bool) -> Result<()> {
-    let report = validate(&load(file)?);
-    let value = serde_json::to_value(&report)?;
+    let mesh = load(file)?;
+    let mut value = serde_json::to_value(validate(&mesh))?;
+    // What the commands that write a result would say of this input (left out, carried as it
+    // was, mended): in the JSON, and as every command says it on stderr.
+    let warnings: Vec<String> = mesh.corners.input_warnings().collect();
+    if json {
+        value["warnings"] = serde_json::json!(warnings);
+    } else {
+        warnings.iter().for_each(|w| eprintln!("meshlod: warning: {w}"));
+    }
     if json {
         out!("{}", serde_json::to_string_pretty(&value)?);
         return Ok(());
