@@ -565,6 +565,9 @@ fn read_primitive(
         joints = reader.read_joints(0).map(|r| r.into_u16().collect::<Vec<[u16; 4]>>());
         weights = reader.read_weights(0).map(|r| r.into_f32().collect::<Vec<[f32; 4]>>());
         if let (Some(j), Some(w)) = (&mut joints, &mut weights) {
+            finite("WEIGHTS_0", w)?;
+            // Weights that do not sum to 1 (invalid glTF) are scaled to, a negative one taken as 0.
+            mended = w.iter_mut().map(|w| crate::mesh::normalize_weights(w) as usize).sum();
             // A joint of weight zero moves nothing: it is read as joint 0, as glTF asks unused
             // entries to be, so that it neither splits a vertex nor draws a validator warning.
             for (j, w) in j.iter_mut().zip(w.iter()) {
@@ -581,8 +584,6 @@ fn read_primitive(
             {
                 return Err(format!("JOINTS_0 of vertex {vertex} names joint {bad}; the skin has {joint_count}"));
             }
-            finite("WEIGHTS_0", w)?;
-            mended = w.iter_mut().map(|w| crate::mesh::normalize_weights(w) as usize).sum();
         } else {
             (joints, weights) = (None, None);
         }
