@@ -310,27 +310,27 @@ fn parse(text: &str) -> Vec<Entry> {
         let mut tokens = line.split_ascii_whitespace();
         let Some(keyword) = tokens.next() else { continue };
         let rest = line[keyword.len()..].trim();
-        if keyword == "newmtl" {
+        // Keywords in any case, as three.js reads them (`map_kd` is seen in the wild).
+        let lower = keyword.to_ascii_lowercase();
+        if lower == "newmtl" {
             entries.push(Entry { name: rest.to_string(), ..Default::default() });
             continue;
         }
         let Some(entry) = entries.last_mut() else { continue };
         let numbers: Vec<f64> = tokens.map_while(|t| t.parse::<f64>().ok()).filter(|x| x.is_finite()).collect();
         let colour = (numbers.len() >= 3).then(|| [numbers[0], numbers[1], numbers[2]]);
-        match keyword {
-            "Kd" if colour.is_some() => entry.diffuse = colour,
+        match lower.as_str() {
+            "kd" if colour.is_some() => entry.diffuse = colour,
             "d" if !numbers.is_empty() => entry.opacity = Some(numbers[0]),
-            "map_Kd" => entry.texture = texture_file(rest),
-            "Ke" if colour.is_some() => entry.emissive = colour,
-            "map_Ke" => entry.emissive_texture = texture_file(rest),
+            "map_kd" => entry.texture = texture_file(rest),
+            "ke" if colour.is_some() => entry.emissive = colour,
+            "map_ke" => entry.emissive_texture = texture_file(rest),
             "norm" => entry.normal_texture = texture_file(rest).map(|file| (file, bump_scale(rest))),
             // (Translated statements the translation cannot read: a spectral curve, a colour
             // given as XYZ.)
-            "Kd" | "d" | "Ke" => {}
+            "kd" | "d" | "ke" => {}
             _ if keyword.starts_with('#') => {}
-            _ if keyword.to_ascii_lowercase().starts_with("map_")
-                || matches!(keyword, "bump" | "disp" | "decal" | "refl") =>
-            {
+            _ if lower.starts_with("map_") || matches!(lower.as_str(), "bump" | "disp" | "decal" | "refl") => {
                 entry.dropped.push(keyword.to_string());
             }
             _ => entry.kept.push(line.to_string()),
@@ -376,7 +376,7 @@ mod tests {
     #[test]
     fn entries_keep_colour_opacity_and_texture() {
         let entries = parse(
-            "newmtl a b\nKd 0.5 0.25 1\nd 0.5\nnewmtl tex\nmap_Kd -o 0.1 0.2 -clamp on -mm 0 1 -imfchan l my tex.png\n",
+            "newmtl a b\nKd 0.5 0.25 1\nd 0.5\nnewmtl tex\nmap_kd -o 0.1 0.2 -clamp on -mm 0 1 -imfchan l my tex.png\n",
         );
         assert_eq!(entries.len(), 2);
         assert_eq!(entries[0].name, "a b");
