@@ -201,8 +201,8 @@ pub(crate) fn write_library(path: &Path, library: &MaterialLibrary) -> std::io::
 }
 
 /// The files an OBJ file refers to, as [`super::write_mesh`] writes them: the MTL files its
-/// `mtllib` statements name (before its first vertex) and the textures their `map_Kd` statements
-/// name, all in the OBJ's folder. Empty for an OBJ without materials or a file that cannot be read.
+/// `mtllib` statements name (before its first vertex) and the textures they name (`map_Kd`,
+/// `map_Ke`, `norm`), all in the OBJ's folder. Empty for an OBJ without materials or a file that cannot be read.
 pub(crate) fn referenced_files(obj: &Path) -> Vec<PathBuf> {
     use std::io::BufRead as _;
     let folder = obj.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
@@ -221,9 +221,10 @@ pub(crate) fn referenced_files(obj: &Path) -> Vec<PathBuf> {
         let small = std::fs::metadata(mtl).is_ok_and(|m| m.is_file() && m.len() <= MAX_MTL_BYTES);
         if let Some(text) = small.then(|| std::fs::read(mtl).ok()).flatten() {
             let folder = mtl.parent().unwrap_or(folder);
-            textures.extend(
-                parse(&String::from_utf8_lossy(&text)).into_iter().filter_map(|e| Some(folder.join(e.texture?))),
-            );
+            for entry in parse(&String::from_utf8_lossy(&text)) {
+                let files = [entry.texture, entry.emissive_texture, entry.normal_texture.map(|(file, _)| file)];
+                textures.extend(files.into_iter().flatten().map(|file| folder.join(file)));
+            }
         }
     }
     files.extend(textures);
@@ -418,6 +419,11 @@ mod tests {
         }
         assert_eq!(std::fs::read(out.join("normal_map.png")).unwrap(), b"normal map.png");
         assert!(out.join("glow.png").is_file() && !back.contains("map_Bump"));
+        // An OBJ naming that MTL file refers to it and to both textures (a batch checks them).
+        std::fs::write(out.join("lod.obj"), "# meshlod\nmtllib lod.mtl\nv 0 0 0\n").unwrap();
+        let mut referred = referenced_files(&out.join("lod.obj"));
+        referred.sort();
+        assert_eq!(referred, ["glow.png", "lod.mtl", "normal_map.png"].map(|f| out.join(f)));
         // A glTF result keeps the translation and leaves the MTL statements out.
         let mut mesh = crate::procedural::icosphere(0);
         mesh.corners.materials = Some(vec![0; 3 * mesh.face_count()]);
