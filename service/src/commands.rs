@@ -283,13 +283,10 @@ fn info(file: &Path, json: bool) -> Result<()> {
     let warnings: Vec<String> = mesh.corners.input_warnings().collect();
     if json {
         value["warnings"] = serde_json::json!(warnings);
-    } else {
-        warnings.iter().for_each(|w| eprintln!("meshlod: warning: {w}"));
-    }
-    if json {
         out!("{}", serde_json::to_string_pretty(&value)?);
         return Ok(());
     }
+    warnings.iter().for_each(|w| eprintln!("meshlod: warning: {w}"));
     out!("{}", file.display());
     // The report's own field order: counts first.
     for (key, v) in value.as_object().expect("report is an object") {

@@ -200,6 +200,12 @@ pub(crate) fn read_referenced(path: &Path) -> std::io::Result<Vec<u8>> {
     std::fs::read(path)
 }
 
+/// The folder of file `path` (`.` for a bare file name): where the files it refers to are found
+/// or written.
+pub(super) fn folder_of(path: &Path) -> &Path {
+    path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."))
+}
+
 /// Reads a mesh file, choosing the format by extension and falling back to the content.
 pub fn read_mesh(path: impl AsRef<Path>) -> Result<Mesh, MeshError> {
     read_mesh_with_limits(path, &ReadLimits::default())
@@ -211,7 +217,7 @@ pub fn read_mesh_with_limits(path: impl AsRef<Path>, limits: &ReadLimits) -> Res
     let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
     let format = MeshFormat::from_extension(path).or_else(|| MeshFormat::sniff(&bytes));
     // A file on disk: its external buffers, images and material files are found next to it.
-    let folder = path.parent().map(|p| if p.as_os_str().is_empty() { Path::new(".") } else { p });
+    let folder = Some(folder_of(path));
     match format {
         Some(MeshFormat::Gltf) => return read_gltf(&bytes, path, folder, limits),
         Some(MeshFormat::Obj) => return read_obj(&bytes, path, folder, limits),
@@ -319,8 +325,7 @@ pub fn write_mesh_with(path: impl AsRef<Path>, mesh: &Mesh, options: &WriteOptio
     let mut writer = std::io::BufWriter::new(file);
     if format == MeshFormat::Gltf {
         let binary = !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gltf"));
-        let folder = path.parent().map(|p| if p.as_os_str().is_empty() { Path::new(".") } else { p });
-        write_gltf_with(&mut writer, mesh, binary, folder, options).map_err(|e| io_error(path, e))?;
+        write_gltf_with(&mut writer, mesh, binary, Some(folder_of(path)), options).map_err(|e| io_error(path, e))?;
     } else if let (MeshFormat::Obj, Some(_), Some(library)) = (format, &mesh.corners.materials, &mesh.corners.library)
         && !library.materials.is_empty()
     {

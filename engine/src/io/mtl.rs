@@ -6,9 +6,9 @@
 //! `map_Ke` (emission), `norm` (normal map; `-bm` its scale). Texture statements take their options
 //! as they come and a file name that may hold spaces. The other statements without a file (`Ka`,
 //! `Ks`, `Ns`, `illum`, `Tr`, ...) are kept as they were in the material's `extras.mtl`, and
-//! written back as they were: an OBJ's LOD keeps its whole material (a glTF result leaves them out). The other texture
-//! statements (`map_Ks`, `map_Bump`, `bump`, `disp`, ...) are not carried, said: `map_Bump` is a
-//! height map to some exporters and a normal map to others. `Tr` is not translated (exporters
+//! written back as they were: an OBJ's LOD keeps its whole material (a glTF result leaves them
+//! out). The other texture statements (`map_Ks`, `map_Bump`, `bump`, `disp`, ...) are not
+//! carried, said: `map_Bump` is a height map to some exporters and a normal map to others. `Tr` is not translated (exporters
 //! disagree on whether it means transparency or opacity). A material named by `usemtl` but found
 //! in no MTL file keeps its name. The translated statements are written from any input's
 //! materials, glTF's among them.
@@ -54,10 +54,7 @@ pub(crate) fn library(names: &[String], libraries: &[String], folder: Option<&Pa
                 line.split_ascii_whitespace().map(|f| folder.join(f)).collect()
             };
             for file in files {
-                let small = std::fs::metadata(&file).is_ok_and(|m| m.is_file() && m.len() <= MAX_MTL_BYTES);
-                if let Some(text) = small.then(|| std::fs::read(&file).ok()).flatten() {
-                    entries.extend(parse(&String::from_utf8_lossy(&text)));
-                }
+                entries.extend(read_entries(&file));
             }
         }
     }
@@ -144,7 +141,7 @@ pub(crate) fn library(names: &[String], libraries: &[String], folder: Option<&Pa
 /// name (`STEM_NAME` where a different file has that name, `STEM` the MTL file's stem); one that
 /// cannot be read is named by its path relative to the folder, as the input had it.
 pub(crate) fn write_library(path: &Path, library: &MaterialLibrary) -> std::io::Result<()> {
-    let folder = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let folder = super::folder_of(path);
     let stem = path.file_stem().map_or("materials".into(), |s| s.to_string_lossy().into_owned());
     let mut placed: Vec<Option<String>> = vec![None; library.images.len()];
     let mut written: Vec<String> = Vec::new();
@@ -202,10 +199,11 @@ pub(crate) fn write_library(path: &Path, library: &MaterialLibrary) -> std::io::
 
 /// The files an OBJ file refers to, as [`super::write_mesh`] writes them: the MTL files its
 /// `mtllib` statements name (before its first vertex) and the textures they name (`map_Kd`,
-/// `map_Ke`, `norm`), all in the OBJ's folder. Empty for an OBJ without materials or a file that cannot be read.
+/// `map_Ke`, `norm`), all in the OBJ's folder. Empty for an OBJ without materials or a file that
+/// cannot be read.
 pub(crate) fn referenced_files(obj: &Path) -> Vec<PathBuf> {
     use std::io::BufRead as _;
-    let folder = obj.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let folder = super::folder_of(obj);
     let Ok(file) = std::fs::File::open(obj) else { return Vec::new() };
     let mut files = Vec::new();
     for line in std::io::BufReader::new(file).lines().map_while(Result::ok) {
@@ -218,13 +216,10 @@ pub(crate) fn referenced_files(obj: &Path) -> Vec<PathBuf> {
     }
     let mut textures = Vec::new();
     for mtl in &files {
-        let small = std::fs::metadata(mtl).is_ok_and(|m| m.is_file() && m.len() <= MAX_MTL_BYTES);
-        if let Some(text) = small.then(|| std::fs::read(mtl).ok()).flatten() {
-            let folder = mtl.parent().unwrap_or(folder);
-            for entry in parse(&String::from_utf8_lossy(&text)) {
-                let files = [entry.texture, entry.emissive_texture, entry.normal_texture.map(|(file, _)| file)];
-                textures.extend(files.into_iter().flatten().map(|file| folder.join(file)));
-            }
+        let folder = super::folder_of(mtl);
+        for entry in read_entries(mtl) {
+            let files = [entry.texture, entry.emissive_texture, entry.normal_texture.map(|(file, _)| file)];
+            textures.extend(files.into_iter().flatten().map(|file| folder.join(file)));
         }
     }
     files.extend(textures);
@@ -301,6 +296,16 @@ fn place_image(
 /// `text` on one line (an MTL statement ends at the line's end).
 pub(super) fn one_line(text: &str) -> String {
     text.replace(['\n', '\r'], " ")
+}
+
+/// The `newmtl` entries of MTL file `file`: none when it is missing, not a regular file, or
+/// larger than [`MAX_MTL_BYTES`] (they are small text files).
+fn read_entries(file: &Path) -> Vec<Entry> {
+    let small = std::fs::metadata(file).is_ok_and(|m| m.is_file() && m.len() <= MAX_MTL_BYTES);
+    small
+        .then(|| std::fs::read(file).ok())
+        .flatten()
+        .map_or_else(Vec::new, |text| parse(&String::from_utf8_lossy(&text)))
 }
 
 /// The `newmtl` entries of an MTL file.
