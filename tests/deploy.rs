@@ -20,7 +20,7 @@ fn require_tool(name: &str) -> Option<PathBuf> {
         .unwrap_or_default();
     if found.is_none() {
         assert!(std::env::var_os("CI").is_none(), "{name} is not installed: CI must run this check");
-        eprintln!("\n!!! SKIPPED: {name} is not installed !!!\n");
+        meshlod_engine::datasets::note_skipped("deploy", &format!("{name} is not installed"));
     }
     found
 }

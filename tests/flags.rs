@@ -64,6 +64,88 @@ fn client_honours_every_flag_and_reports_as_local_does() {
 }
 
 #[test]
+fn local_and_client_runs_of_a_gltf_with_a_warning_print_the_same_report_and_write_the_same_bytes() {
+    let dir = tempdir("client-parity");
+    let obj = dir.join("torus.obj");
+    ok(&["generate", "torus", "-o", s(&obj), "--resolution", "24"]);
+    let plain = dir.join("plain.gltf");
+    ok(&["convert", s(&obj), "-o", s(&plain)]);
+    // An application-specific attribute: read, passed over, and said in the warnings.
+    let mut doc: Value = serde_json::from_slice(&std::fs::read(&plain).unwrap()).unwrap();
+    let position = doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"].clone();
+    for primitive in doc["meshes"][0]["primitives"].as_array_mut().unwrap() {
+        primitive["attributes"]["_SENSOR"] = position.clone();
+    }
+    let input = dir.join("warned.gltf");
+    std::fs::write(&input, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let server = Server::start();
+    let run = |remote: bool, json: bool| {
+        let output = dir.join(format!("{}-{json}.glb", if remote { "remote" } else { "local" }));
+        let mut args = if remote { vec!["client", "--server", server.address.as_str()] } else { vec![] };
+        args.extend_from_slice(&["simplify", s(&input), "-o", s(&output), "--keep", "0.25", "--hausdorff"]);
+        if json {
+            args.push("--json");
+        }
+        let out = ok(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+        let warnings: Vec<String> =
+            stderr.lines().filter(|l| l.starts_with("meshlod: warning:")).map(str::to_string).collect();
+        (String::from_utf8_lossy(&out.stdout).to_string(), warnings, std::fs::read(&output).unwrap())
+    };
+    let (local_json, local_warnings, local_bytes) = run(false, true);
+    let (remote_json, remote_warnings, remote_bytes) = run(true, true);
+    assert!(
+        local_warnings.iter().any(|w| w.contains("_SENSOR")),
+        "the local run says what it passed over: {local_warnings:?}"
+    );
+    assert_eq!(local_warnings, remote_warnings, "the same warnings on stderr");
+    let mut local: Value = serde_json::from_str(&local_json).unwrap();
+    let mut remote: Value = serde_json::from_str(&remote_json).unwrap();
+    for report in [&mut local, &mut remote] {
+        report.as_object_mut().unwrap().remove("seconds");
+    }
+    assert_eq!(local, remote, "the same report, but for the engine's time");
+    assert!((local["kept_fraction"].as_f64().unwrap() - 0.25).abs() < 0.01, "{local}");
+    assert_eq!(local_bytes, remote_bytes, "the same GLB bytes");
+    // The text reports agree too, but for the time and the output's name.
+    let scrub = |text: &str| -> String {
+        text.lines().map(|l| l.split(" s → ").next().unwrap_or(l).to_string()).collect::<Vec<_>>().join("\n")
+    };
+    let (local_text, _, _) = run(false, false);
+    let (remote_text, _, _) = run(true, false);
+    assert_eq!(
+        scrub(&local_text).replace(|c: char| c.is_ascii_digit(), "#"),
+        scrub(&remote_text).replace(|c: char| c.is_ascii_digit(), "#")
+    );
+}
+
+#[test]
+fn keep_is_the_fraction_kept_and_ratio_the_fraction_removed() {
+    let dir = tempdir("keep");
+    let input = dir.join("blob.obj");
+    ok(&["generate", "blob", "-o", s(&input), "--resolution", "24"]);
+    let keep = ok_json(&["simplify", s(&input), "-o", s(&dir.join("k.obj")), "--keep", "0.1", "--json"]);
+    let ratio = ok_json(&["simplify", s(&input), "-o", s(&dir.join("r.obj")), "--ratio", "0.9", "--json"]);
+    assert_eq!(keep["target_faces"], ratio["target_faces"]);
+    assert_eq!(keep["faces_out"], ratio["faces_out"]);
+    let faces_in = keep["faces_in"].as_f64().unwrap();
+    assert!((keep["target_faces"].as_f64().unwrap() - 0.1 * faces_in).abs() <= 1.0, "{keep}");
+    let kept = keep["kept_fraction"].as_f64().unwrap();
+    assert!((kept + keep["removed_fraction"].as_f64().unwrap() - 1.0).abs() < 1e-12);
+    assert!((kept - 0.1).abs() < 0.01, "{keep}");
+    fails_with(&["simplify", s(&input), "-o", s(&dir.join("x.obj")), "--keep", "1.5"], "--keep");
+    fails_with(&["simplify", s(&input), "-o", s(&dir.join("x.obj")), "--keep", "0"], "--keep");
+    fails_with(&["simplify", s(&input), "-o", s(&dir.join("x.obj")), "--keep", "0.1", "--ratio", "0.9"], "--ratio");
+    let predicted = ok_json(&["predict", s(&input), "--keep", "0.1", "--json"]);
+    assert_eq!(predicted, ok_json(&["predict", s(&input), "--ratio", "0.9", "--json"]));
+    // convert takes -o as every other command does; the positional form still works.
+    ok(&["convert", s(&input), "-o", s(&dir.join("a.ply"))]);
+    ok(&["convert", s(&input), s(&dir.join("b.ply"))]);
+    assert_eq!(std::fs::read(dir.join("a.ply")).unwrap(), std::fs::read(dir.join("b.ply")).unwrap());
+    fails_with(&["convert", s(&input)], "OUTPUT");
+}
+
+#[test]
 fn client_sends_and_gets_back_materials() {
     let dir = tempdir("client-materials");
     let plain = dir.join("plain.obj");

@@ -324,7 +324,7 @@ async fn encoded_glb_is_read_and_its_attributes_kept() {
     let base = pm.base.as_ref().unwrap();
     assert!(base.uvs.is_empty());
     let rebuilt = progressive_from_proto(base, &pm.splits).expect("the splits fit the base");
-    let file = meshlod_engine::pm_format::decode(&pm.file, std::path::Path::new("response.pm")).unwrap();
+    let file = meshlod_engine::pm_format::decode(&pm.file, std::path::Path::new("response.pm")).unwrap().0;
     assert!(file.has_attributes());
     assert_eq!(file.levels(), rebuilt.levels());
     let finest = file.at_level(file.levels());
@@ -334,7 +334,7 @@ async fn encoded_glb_is_read_and_its_attributes_kept() {
     request.options.as_mut().unwrap().progressive_lossless = true;
     let bytes = client.simplify(request).await.unwrap().into_inner().progressive.unwrap().file;
     assert_eq!(u16::from_le_bytes([bytes[4], bytes[5]]), 2);
-    let exact = meshlod_engine::pm_format::decode(&bytes, std::path::Path::new("exact.pm")).unwrap();
+    let exact = meshlod_engine::pm_format::decode(&bytes, std::path::Path::new("exact.pm")).unwrap().0;
     assert_eq!(exact.at_faces(usize::MAX).triangles, finest.triangles);
     // A GLB whose buffer lives in another file cannot be read from a request.
     let gltf =

@@ -84,7 +84,7 @@ async fn streamed_splits_carry_their_corner_values() {
     // The unary call's lossless `.pm` for the same request: the same levels, corner for corner.
     let response = client.simplify(request(&mesh)).await.unwrap().into_inner();
     let file = response.progressive.unwrap().file;
-    let unary = meshlod_engine::pm_format::decode(&file, std::path::Path::new("unary.pm")).unwrap();
+    let unary = meshlod_engine::pm_format::decode(&file, std::path::Path::new("unary.pm")).unwrap().0;
     assert_eq!(streamed.levels(), unary.levels());
     for level in [0, streamed.levels() / 2, streamed.levels()] {
         let (a, b) = (streamed.at_level(level), unary.at_level(level));

@@ -35,8 +35,29 @@ fn require(test: &str, found: Option<PathBuf>, what: &str, env: &str) -> Option<
             panic!("{test}: shared {what} not found (set {env}); CI must run with them")
         }
         None => {
-            eprintln!("\n!!! {test}: SKIPPED — shared {what} not found (set {env} or provide ../shared) !!!\n");
+            note_skipped(test, &format!("shared {what} not found (set {env} or provide ../shared)"));
             None
+        }
+    }
+}
+
+/// Environment variable naming a file to which every skipped test adds a line, so that the test
+/// command can count and list them at its end (cargo swallows a passing test's stderr).
+pub const SKIP_LOG_ENV: &str = "MESHLOD_SKIP_LOG";
+
+/// Says loudly that `test` was skipped and why: on stderr, and as a line `test: why` in the file
+/// `$MESHLOD_SKIP_LOG` names, when set.
+pub fn note_skipped(test: &str, why: &str) {
+    eprintln!("\n!!! {test}: SKIPPED — {why} !!!\n");
+    if let Some(log) = std::env::var_os(SKIP_LOG_ENV) {
+        use std::io::Write;
+        let appended = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&log)
+            .and_then(|mut f| writeln!(f, "{test}: {why}"));
+        if let Err(e) = appended {
+            eprintln!("!!! {test}: the skip could not be noted in {}: {e} !!!", PathBuf::from(log).display());
         }
     }
 }

@@ -13,6 +13,7 @@ mod fan;
 pub mod features;
 pub mod hausdorff;
 pub mod io;
+pub mod library;
 pub mod mesh;
 mod parallel;
 pub mod pm;

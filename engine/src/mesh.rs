@@ -7,6 +7,7 @@ use glam::DVec3;
 use serde::Serialize;
 
 use crate::error::MeshError;
+pub use crate::library::{Image, ImageSource, MaterialLibrary, OtherPrimitive, Rig, RigAccessor};
 
 /// Index of a vertex in [`Mesh::positions`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Serialize)]
@@ -74,122 +75,6 @@ pub struct CornerAttributes {
 /// The material value of a face that has none (glTF's default material).
 pub const NO_MATERIAL: u32 = u32::MAX;
 
-/// What a mesh's faces are drawn with, kept in glTF's terms so that a glTF written from the mesh
-/// draws as its input did: the input's `materials`, `textures` and `samplers` JSON arrays carried
-/// verbatim (their indices into each other stay valid), and its images with their bytes or where
-/// to find them. OBJ materials (MTL) are translated into the same terms.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct MaterialLibrary {
-    /// glTF `materials`, one JSON object each.
-    pub materials: Vec<serde_json::Value>,
-    /// glTF `textures`.
-    pub textures: Vec<serde_json::Value>,
-    /// glTF `samplers`.
-    pub samplers: Vec<serde_json::Value>,
-    /// glTF `images`.
-    pub images: Vec<Image>,
-    /// Extensions the materials and textures use (glTF `extensionsUsed`), and those of them the
-    /// input required.
-    pub extensions_used: Vec<String>,
-    /// See `extensions_used`.
-    pub extensions_required: Vec<String>,
-    /// What the input had that a mesh does not carry (morph targets, normals that only some
-    /// primitives have, point and line primitives beside a skin, a skeleton that cannot be kept), named for the
-    /// warnings of every operation that writes a result.
-    pub not_carried: Vec<String>,
-    /// The skeleton and animations of a skinned asset, when the mesh carries its joints and
-    /// weights.
-    pub rig: Option<Rig>,
-    /// The input's point and line primitives, written back beside the triangles as they were.
-    pub other_primitives: Vec<OtherPrimitive>,
-    /// What the reader mended so that the result is valid glTF (weights that did not sum to 1),
-    /// said by every operation that writes a result.
-    pub mended: Vec<String>,
-}
-
-/// A glTF point or line primitive (POINTS, LINES, LINE_LOOP, LINE_STRIP: not surface, so not
-/// simplified or refined), carried as it was: its positions placed in the world as the mesh's are
-/// (normals and tangents turned with them) and stored as floats, as are its texture coordinates and
-/// colours; its other attributes and its indices with their data as it was.
-#[derive(Debug, Clone, PartialEq)]
-pub struct OtherPrimitive {
-    /// glTF `mode`: 0 points, 1 lines, 2 line loop, 3 line strip.
-    pub mode: u32,
-    /// Its material: an index into the library's `materials`.
-    pub material: Option<u32>,
-    /// Its attributes by glTF name (`POSITION`, `COLOR_0`, ...), each an accessor with its data.
-    pub attributes: Vec<(String, RigAccessor)>,
-    /// Its indices, when it has them.
-    pub indices: Option<RigAccessor>,
-}
-
-/// A skinned glTF asset's node hierarchy, skin and animations, carried so that a glTF written
-/// from the mesh still moves as its input did. The mesh's positions are in the skin's bind space
-/// (a skinned node's own transform is ignored, as glTF specifies), its corners carry the joints
-/// and weights, and the result is drawn by the node `mesh_node`.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Rig {
-    /// glTF `nodes`, without their `mesh` and `camera` (a node keeps its children, transform,
-    /// skin, name and extras, so the indices the skins and animations use stay valid).
-    pub nodes: Vec<serde_json::Value>,
-    /// The node that draws the mesh, with the skin.
-    pub mesh_node: usize,
-    /// glTF `scenes`, and the default one.
-    pub scenes: Vec<serde_json::Value>,
-    /// See `scenes`.
-    pub scene: Option<usize>,
-    /// glTF `skins`; `inverseBindMatrices` refer to `accessors`.
-    pub skins: Vec<serde_json::Value>,
-    /// glTF `animations`; their samplers' `input` and `output` refer to `accessors`.
-    pub animations: Vec<serde_json::Value>,
-    /// The accessors the skins and animations read, with their data.
-    pub accessors: Vec<RigAccessor>,
-}
-
-impl Rig {
-    /// Number of joints of the skin that draws the mesh (what a corner's joint indices are below).
-    pub fn joint_count(&self) -> usize {
-        let skin = self.nodes.get(self.mesh_node).and_then(|n| n.get("skin")).and_then(|s| s.as_u64());
-        skin.and_then(|s| self.skins.get(s as usize))
-            .and_then(|s| s.get("joints"))
-            .and_then(|j| j.as_array())
-            .map_or(0, Vec::len)
-    }
-}
-
-/// One accessor of a [`Rig`] or an [`OtherPrimitive`]: its JSON (`componentType`, `type`, `count`, `normalized`, `min`,
-/// `max`, `name`; no `bufferView`, `byteOffset` or `sparse`) and its elements packed one after
-/// another.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RigAccessor {
-    /// See [`RigAccessor`].
-    pub json: serde_json::Value,
-    /// See [`RigAccessor`].
-    pub bytes: Vec<u8>,
-}
-
-/// One image of a [`MaterialLibrary`].
-#[derive(Debug, Clone, PartialEq)]
-pub struct Image {
-    /// The image's JSON without `uri`, `bufferView` and `mimeType` (its name, extras, ...).
-    pub json: serde_json::Value,
-    /// Where its bytes are.
-    pub source: ImageSource,
-    /// Its media type, when known (`image/png`, `image/jpeg`, ...).
-    pub mime_type: Option<String>,
-}
-
-/// Where an image's bytes are.
-#[derive(Debug, Clone, PartialEq)]
-pub enum ImageSource {
-    /// Held here (from a GLB's binary chunk or a data URI).
-    Bytes(Vec<u8>),
-    /// A file on disk (a relative URI resolved against the input's folder).
-    File(std::path::PathBuf),
-    /// A URI that could not be resolved (bytes that came without their folder): carried as is.
-    Uri(String),
-}
-
 /// Scales a vertex's skin weights to sum to 1, as glTF requires (negative ones taken as 0): the
 /// sum taken in order in single precision, as the Khronos validator takes it, is then 1 within its
 /// tolerance (2e-7 per weight that is not 0). Whether they changed; weights that already sum to 1
@@ -240,17 +125,6 @@ impl CornerAttributes {
         (n > 0).then(|| {
             format!("the input's {n} point and line primitive(s) are carried as they were into a glTF result (only triangles are simplified or refined)")
         })
-    }
-}
-
-impl MaterialLibrary {
-    /// The name of material `index` (its `name`, else `material{index}`).
-    pub fn material_name(&self, index: u32) -> String {
-        self.materials
-            .get(index as usize)
-            .and_then(|m| m.get("name"))
-            .and_then(|n| n.as_str())
-            .map_or_else(|| format!("material{index}"), str::to_string)
     }
 }
 
@@ -564,7 +438,7 @@ impl CornerAttributes {
         }
         if let Some(library) = &self.library {
             for (i, other) in library.other_primitives.iter().enumerate() {
-                crate::io::check_other_primitive(other, library.materials.len()).map_err(|reason| {
+                other.check(library.materials.len()).map_err(|reason| {
                     MeshError::InvalidParameter {
                         name: "other_primitives",
                         reason: format!("point or line primitive {i}: {reason}"),

@@ -241,8 +241,6 @@ pub struct ProgressiveMesh {
     input_vertex: Option<Vec<u32>>,
     /// Per-corner attributes, when the input had them (built by the simplifier only).
     attributes: Option<PmAttributes>,
-    /// The grids its values lie on, when read from a compact `.pm` file.
-    quantization: Option<crate::pm_format::Quantization>,
 }
 
 impl ProgressiveMesh {
@@ -313,7 +311,7 @@ impl ProgressiveMesh {
         if let Some(attributes) = &attributes {
             base.corners = attributes.values.pick(attributes.base.iter().flatten().map(|&k| k as usize));
         }
-        ProgressiveMesh { base, splits, face_counts, input_vertex: Some(input_vertex), attributes, quantization: None }
+        ProgressiveMesh { base, splits, face_counts, input_vertex: Some(input_vertex), attributes }
     }
 
     /// Assembles a progressive mesh from parts read elsewhere (a file, a stream), checking it by
@@ -326,7 +324,7 @@ impl ProgressiveMesh {
             face_counts.push(face_counts.last().expect("non-empty") + s.added_faces() as u32);
         }
         let pm =
-            ProgressiveMesh { base, splits, face_counts, input_vertex: None, attributes: None, quantization: None };
+            ProgressiveMesh { base, splits, face_counts, input_vertex: None, attributes: None };
         let mut cursor = LodCursor::new(&pm);
         cursor.seek_level(pm.splits.len())?;
         Ok(pm)
@@ -429,17 +427,6 @@ impl ProgressiveMesh {
     /// The per-corner attributes of the levels, when there are any.
     pub fn attributes(&self) -> Option<&PmAttributes> {
         self.attributes.as_ref()
-    }
-
-    /// The grids of the compact `.pm` file it was read from, if it was.
-    pub fn quantization(&self) -> Option<&crate::pm_format::Quantization> {
-        self.quantization.as_ref()
-    }
-
-    /// Records the grids its values lie on (the compact reader does).
-    pub(crate) fn with_quantization(mut self, quantization: crate::pm_format::Quantization) -> ProgressiveMesh {
-        self.quantization = Some(quantization);
-        self
     }
 
     /// Adds per-corner attributes (read from a file), checked against the splits: every index in

@@ -205,7 +205,7 @@ fn readers_survive_mutated_files() {
                 fix_checksum(&mut input);
             }
             let result = no_panic("pm decode", seed, case, &input, || decode(&input, Path::new("fuzz.pm")));
-            if let Ok(pm) = result {
+            if let Ok((pm, _)) = result {
                 // A file that decodes gives every level.
                 no_panic("pm levels", seed, case, &input, || {
                     for level in [0, pm.levels() / 2, pm.levels()] {
@@ -432,7 +432,7 @@ fn simplify_pm_and_levels_survive_arbitrary_meshes() {
                 assert_eq!(pm.has_attributes(), with_attributes, "case {case}");
                 no_panic("pm", seed, case, text.as_bytes(), || {
                     for bytes in [encode(&pm), encode_lossless(&pm)] {
-                        let back = decode(&bytes, Path::new("fuzz.pm")).unwrap();
+                        let back = decode(&bytes, Path::new("fuzz.pm")).unwrap().0;
                         assert_eq!(back.levels(), pm.levels());
                         back.at_level(back.levels()).check().unwrap();
                     }
@@ -483,7 +483,7 @@ fn holed_spheres_close_holes_validly_and_refine_back_exactly() {
         let full = pm.at_level(pm.levels());
         assert_eq!(full.face_count(), mesh.face_count(), "case {case}");
         for bytes in [encode(&pm), encode_lossless(&pm)] {
-            let back = decode(&bytes, Path::new("holed.pm")).unwrap();
+            let back = decode(&bytes, Path::new("holed.pm")).unwrap().0;
             assert_eq!(back.at_level(back.levels()).triangles, full.triangles, "case {case}");
         }
     }

@@ -721,7 +721,7 @@ fn gltf_point_and_line_primitives_are_carried_as_they_were() {
     let options = SimplifyOptions { record_progressive: true, ..Default::default() };
     let pm = simplify(&mesh, &options).unwrap().progressive.unwrap();
     let decoded =
-        meshlod_engine::pm_format::decode(&meshlod_engine::pm_format::encode(&pm), Path::new("x.pm")).unwrap();
+        meshlod_engine::pm_format::decode(&meshlod_engine::pm_format::encode(&pm), Path::new("x.pm")).unwrap().0;
     assert_eq!(others(decoded.base()), read);
     // A primitive that names a material the library lacks is refused by name.
     let mut bad = mesh.clone();

@@ -159,7 +159,7 @@ fn pm_file_round_trips_and_refuses_corruption() {
     for placement in [Placement::Endpoint, Placement::Optimal] {
         let pm = simplify(&mesh, &SimplifyOptions { placement, ..options(0.97) }).unwrap().progressive.unwrap();
         let bytes = encode_lossless(&pm);
-        let back = decode(&bytes, Path::new("t.pm")).unwrap();
+        let back = decode(&bytes, Path::new("t.pm")).unwrap().0;
         assert_eq!(back.base(), pm.base());
         assert_eq!(back.splits(), pm.splits());
         assert_eq!(back.at_level(back.levels()), pm.at_level(pm.levels()));
@@ -171,7 +171,7 @@ fn pm_file_round_trips_and_refuses_corruption() {
         // The compact form: the same faces at every level (its positions are checked in
         // tests/pm_compact.rs).
         let compact = encode(&pm);
-        let back = decode(&compact, Path::new("t.pm")).unwrap();
+        let back = decode(&compact, Path::new("t.pm")).unwrap().0;
         assert_eq!(back.at_level(back.levels()).triangles, pm.at_level(pm.levels()).triangles);
         for bytes in [bytes, compact] {
             // Every truncation is refused, never a panic.
@@ -203,9 +203,9 @@ fn triangular_holes_close_and_their_splits_open_them_again_in_every_form() {
     let pm = out.progressive.unwrap();
     assert_exact_round_trip("holed blob", &mesh, &pm, 0);
     // Both file forms carry the holes: the same splits (lossless), the same faces at every level.
-    let lossless = decode(&encode_lossless(&pm), Path::new("t.pm")).unwrap();
+    let lossless = decode(&encode_lossless(&pm), Path::new("t.pm")).unwrap().0;
     assert_eq!(lossless.splits(), pm.splits());
-    let compact = decode(&encode(&pm), Path::new("t.pm")).unwrap();
+    let compact = decode(&encode(&pm), Path::new("t.pm")).unwrap().0;
     let holes = |p: &ProgressiveMesh| p.splits().iter().map(|s| s.hole).collect::<Vec<_>>();
     assert_eq!(holes(&compact), holes(&pm));
     for level in (0..=pm.levels()).step_by(97).chain([pm.levels()]) {

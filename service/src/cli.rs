@@ -44,8 +44,12 @@ pub enum Command {
     Convert {
         /// Input mesh.
         input: PathBuf,
-        /// Output mesh (.obj, binary .ply, .gltf or .glb).
-        output: PathBuf,
+        /// Output mesh (.obj, binary .ply, .gltf or .glb); the form without `-o` is accepted too.
+        #[arg(short, long = "output", value_name = "OUTPUT", required_unless_present = "output_positional")]
+        output: Option<PathBuf>,
+        /// The output as a second positional argument (`convert IN OUT`), as older scripts call it.
+        #[arg(value_name = "OUTPUT", conflicts_with = "output", hide = true)]
+        output_positional: Option<PathBuf>,
         /// Weld coincident vertices, drop degenerate/duplicate faces and unreferenced vertices.
         #[arg(long)]
         clean: bool,
@@ -258,8 +262,12 @@ pub struct SimplifyArgs {
     /// Keep at most this many faces.
     #[arg(long)]
     pub faces: Option<u32>,
-    /// Fraction of the faces to remove, as in the paper: 0.9 keeps 10% (default 0.5 when --faces
-    /// is not given either; with both, whichever is met first).
+    /// Fraction of the faces to keep: 0.1 keeps 10% (as gltfpack's -si counts). The same target
+    /// as `--ratio 0.9`.
+    #[arg(long, value_name = "FRACTION", conflicts_with = "ratio", value_parser = parse_keep)]
+    pub keep: Option<f64>,
+    /// Fraction of the faces to remove, as in the paper: 0.9 keeps 10% (default 0.5 when neither
+    /// --faces nor --keep is given; with --faces too, whichever is met first).
     #[arg(long)]
     pub ratio: Option<f64>,
     /// Stop before a collapse whose error estimate exceeds this (paper units).
@@ -341,7 +349,7 @@ impl SimplifyArgs {
     pub fn job(&self) -> SimplifyJob {
         let options = proto::SimplifyOptions {
             target_faces: self.faces,
-            target_ratio: self.ratio,
+            target_ratio: removed_fraction(self.ratio, self.keep),
             max_error: self.max_error,
             metric: match self.metric {
                 MetricArg::Qfvp => proto::Metric::Qfvp,
@@ -455,9 +463,12 @@ impl RefineArgs {
 pub struct PredictArgs {
     /// Input mesh.
     pub input: PathBuf,
-    /// Fraction of faces to remove.
-    #[arg(long, required_unless_present = "faces")]
+    /// Fraction of faces to remove, as in the paper (0.9 keeps 10%).
+    #[arg(long, required_unless_present_any = ["faces", "keep"])]
     pub ratio: Option<f64>,
+    /// Fraction of faces to keep (0.1: the same target as `--ratio 0.9`).
+    #[arg(long, value_name = "FRACTION", conflicts_with = "ratio", value_parser = parse_keep)]
+    pub keep: Option<f64>,
     /// Target face count (with --ratio too: whichever is met first).
     #[arg(long)]
     pub faces: Option<u32>,
@@ -469,7 +480,11 @@ pub struct PredictArgs {
 impl PredictArgs {
     /// The job these flags ask for.
     pub fn job(&self) -> PredictJob {
-        PredictJob { input: self.input.clone(), target_faces: self.faces, target_ratio: self.ratio }
+        PredictJob {
+            input: self.input.clone(),
+            target_faces: self.faces,
+            target_ratio: removed_fraction(self.ratio, self.keep),
+        }
     }
 }
 
@@ -658,4 +673,20 @@ fn parse_attribute_weights(text: &str) -> Result<proto::AttributeWeights, String
         }
     }
     Ok(weights)
+}
+
+/// `--keep`: a fraction of the faces to keep, in (0, 1].
+fn parse_keep(text: &str) -> Result<f64, String> {
+    let keep: f64 = text.parse().map_err(|_| format!("{text:?} is not a number"))?;
+    if keep > 0.0 && keep <= 1.0 {
+        Ok(keep)
+    } else {
+        Err(format!("{keep} is outside (0, 1]: the fraction of the faces to keep"))
+    }
+}
+
+/// The contract's `target_ratio` (the fraction removed) from `--ratio` or `--keep` (the fraction
+/// kept), whichever was given: clap lets only one through.
+fn removed_fraction(ratio: Option<f64>, keep: Option<f64>) -> Option<f64> {
+    ratio.or(keep.map(|k| 1.0 - k))
 }

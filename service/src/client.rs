@@ -132,6 +132,13 @@ fn output_of(mesh: Option<&proto::Mesh>, encoded: Option<&proto::EncodedMesh>) -
     Ok(mesh_from_proto(mesh.context("response without mesh")?, "mesh", &MeshLimits::default())?)
 }
 
+/// Inserts at `at` the input file's own warnings (what it had that a result does not carry, what
+/// was mended on reading) that the server's `warnings` do not already hold.
+fn add_input_warnings(warnings: &mut Vec<String>, input: &meshlod_engine::Mesh, at: usize) {
+    let missing: Vec<String> = input.corners.input_warnings().filter(|w| !warnings.contains(w)).collect();
+    warnings.splice(at..at, missing);
+}
+
 /// A status from the server as an error for people.
 fn status_error(status: tonic::Status) -> anyhow::Error {
     anyhow::anyhow!("server: {} ({:?})", status.message(), status.code())
@@ -163,18 +170,24 @@ impl Executor for Remote {
         })?;
         let response = response.into_inner();
         let out = output_of(response.mesh.as_ref(), response.encoded.as_ref())?;
+        let pm_file = response.progressive.as_ref().map(|pm| pm.file.as_slice()).filter(|f| !f.is_empty());
         let progressive = match &response.progressive {
-            // With attributes the server sends the `.pm` file too: the same bytes as a local run.
+            // With attributes the server sends the `.pm` file too: written as it came, the same
+            // bytes as a local run.
             Some(pm) if !pm.file.is_empty() => {
-                Some(meshlod_engine::pm_format::decode(&pm.file, std::path::Path::new("response.pm"))?)
+                Some(meshlod_engine::pm_format::decode(&pm.file, std::path::Path::new("response.pm"))?.0)
             }
             Some(pm) => {
                 Some(progressive_from_proto(pm.base.as_ref().context("progressive mesh without base")?, &pm.splits)?)
             }
             None => None,
         };
-        let stats = response.stats.unwrap_or_default();
-        finish_simplify(job, &out, progressive.as_ref(), &stats, response.hausdorff.as_ref())
+        let mut stats = response.stats.unwrap_or_default();
+        // What the input file had that the mesh sent up could not say (the server reads the mesh,
+        // not the file), where a local run says it: after the options' warnings.
+        let after = crate::jobs::simplify_warnings(&options).len().min(stats.warnings.len());
+        add_input_warnings(&mut stats.warnings, &mesh, after);
+        finish_simplify(job, &out, progressive.as_ref(), pm_file, &stats, response.hausdorff.as_ref())
     }
 
     fn refine(&self, job: &RefineJob) -> Result<Report> {
@@ -192,7 +205,10 @@ impl Executor for Remote {
             .block_on(async { client.refine(self.request(request)?).await.map_err(status_error) })?
             .into_inner();
         let out = output_of(response.mesh.as_ref(), response.encoded.as_ref())?;
-        finish_refine(job, &out, &response.stats.unwrap_or_default())
+        let mut stats = response.stats.unwrap_or_default();
+        let end = stats.warnings.len();
+        add_input_warnings(&mut stats.warnings, &mesh, end);
+        finish_refine(job, &out, &stats)
     }
 
     fn predict(&self, job: &PredictJob) -> Result<Report> {

@@ -38,7 +38,8 @@ macro_rules! out {
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Info { file, json } => info(&file, json),
-        Command::Convert { input, output, clean, drop_attributes, write } => {
+        Command::Convert { input, output, output_positional, clean, drop_attributes, write } => {
+            let output = output.or(output_positional).context("convert: give the output with -o OUT")?;
             convert(&input, &output, clean, drop_attributes, &write.options())
         }
         Command::Hausdorff { a, b, tolerance, samples, seed, directed, json } => {

@@ -85,12 +85,13 @@ pub fn check_simplify_outputs(job: &SimplifyJob) -> Result<()> {
     Ok(())
 }
 
-/// The end of every simplify job, wherever it ran: writes the mesh and the progressive mesh, and
-/// builds the report.
+/// The end of every simplify job, wherever it ran: writes the mesh and the progressive mesh (the
+/// `.pm` bytes a server sent, `pm_file`, as they are; else encoded here), and builds the report.
 pub fn finish_simplify(
     job: &SimplifyJob,
     mesh: &Mesh,
     progressive: Option<&ProgressiveMesh>,
+    pm_file: Option<&[u8]>,
     stats: &proto::SimplifyStats,
     measured: Option<&proto::HausdorffReport>,
 ) -> Result<Report> {
@@ -99,7 +100,11 @@ pub fn finish_simplify(
     add_unwritten_warning(&mut report, &job.output, mesh);
     if let Some(path) = &job.pm {
         let pm = progressive.context("the run returned no progressive mesh")?;
-        let bytes = if job.options.progressive_lossless { encode_lossless(pm) } else { encode(pm) };
+        let bytes = match pm_file {
+            Some(file) => file.to_vec(),
+            None if job.options.progressive_lossless => encode_lossless(pm),
+            None => encode(pm),
+        };
         std::fs::write(path, &bytes).with_context(|| format!("writing {}", path.display()))?;
         report.extend(report::progressive(pm, bytes.len()));
     }
@@ -176,7 +181,8 @@ impl Executor for Local {
         let predictor = self.predictor_if(options.w_auto)?;
         let run = crate::jobs::simplify(&mesh, &options, predictor.as_deref(), None)
             .map_err(|e| status_error(e, &job.input))?;
-        finish_simplify(job, &run.result.mesh, run.result.progressive.as_ref(), &run.stats, run.hausdorff.as_ref())
+        let progressive = run.result.progressive.as_ref();
+        finish_simplify(job, &run.result.mesh, progressive, None, &run.stats, run.hausdorff.as_ref())
     }
 
     fn refine(&self, job: &RefineJob) -> Result<Report> {

@@ -48,6 +48,8 @@ pub fn simplify(s: &proto::SimplifyStats, measured: Option<&proto::HausdorffRepo
         "faces_in": s.faces_in,
         "faces_out": s.faces_out,
         "target_faces": s.target_faces,
+        "kept_fraction": s.faces_out as f64 / s.faces_in.max(1) as f64,
+        "removed_fraction": 1.0 - s.faces_out as f64 / s.faces_in.max(1) as f64,
         "vertices_in": s.vertices_in,
         "vertices_out": s.vertices_out,
         "collapses": s.collapses,

@@ -141,7 +141,7 @@ pub(crate) fn library(names: &[String], libraries: &[String], folder: Option<&Pa
 /// name (`STEM_NAME` where a different file has that name, `STEM` the MTL file's stem); one that
 /// cannot be read is named by its path relative to the folder, as the input had it.
 pub(crate) fn write_library(path: &Path, library: &MaterialLibrary) -> std::io::Result<()> {
-    let folder = super::folder_of(path);
+    let folder = super::files::folder_of(path);
     let stem = path.file_stem().map_or("materials".into(), |s| s.to_string_lossy().into_owned());
     let mut placed: Vec<Option<String>> = vec![None; library.images.len()];
     let mut written: Vec<String> = Vec::new();
@@ -203,7 +203,7 @@ pub(crate) fn write_library(path: &Path, library: &MaterialLibrary) -> std::io::
 /// cannot be read.
 pub(crate) fn referenced_files(obj: &Path) -> Vec<PathBuf> {
     use std::io::BufRead as _;
-    let folder = super::folder_of(obj);
+    let folder = super::files::folder_of(obj);
     let Ok(file) = std::fs::File::open(obj) else { return Vec::new() };
     let mut files = Vec::new();
     for line in std::io::BufReader::new(file).lines().map_while(Result::ok) {
@@ -216,7 +216,7 @@ pub(crate) fn referenced_files(obj: &Path) -> Vec<PathBuf> {
     }
     let mut textures = Vec::new();
     for mtl in &files {
-        let folder = super::folder_of(mtl);
+        let folder = super::files::folder_of(mtl);
         for entry in read_entries(mtl) {
             let files = [entry.texture, entry.emissive_texture, entry.normal_texture.map(|(file, _)| file)];
             textures.extend(files.into_iter().flatten().map(|file| folder.join(file)));
@@ -243,16 +243,16 @@ fn place_image(
             if file.parent().and_then(here).is_some_and(|p| Some(p) == here(folder)) && file.is_file() {
                 return Ok(one_line(&name));
             }
-            match super::read_referenced(file) {
+            match super::files::read_referenced(file) {
                 Ok(bytes) => (bytes, name),
                 Err(_) => {
-                    let relative = super::gltf_write::relative_path(file, folder);
+                    let relative = super::files::relative_path(file, folder);
                     return Ok(one_line(&relative.unwrap_or_else(|| file.to_string_lossy().into_owned())));
                 }
             }
         }
         ImageSource::Bytes(bytes) => {
-            let extension = match super::gltf_write::sniff_image(bytes).or(image.mime_type.as_deref()) {
+            let extension = match super::files::sniff_image(bytes).or(image.mime_type.as_deref()) {
                 Some("image/png") => "png",
                 Some("image/jpeg") => "jpg",
                 Some("image/webp") => "webp",
@@ -279,7 +279,7 @@ fn place_image(
         let last = k == candidates.len() - 1;
         match std::fs::symlink_metadata(&target) {
             Err(_) => {}
-            Ok(meta) if meta.is_file() && super::read_referenced(&target).is_ok_and(|held| held == bytes) => {
+            Ok(meta) if meta.is_file() && super::files::read_referenced(&target).is_ok_and(|held| held == bytes) => {
                 written.push(file.clone());
                 return Ok(file.clone());
             }
@@ -434,7 +434,7 @@ mod tests {
         mesh.corners.materials = Some(vec![0; 3 * mesh.face_count()]);
         mesh.corners.library = Some(std::sync::Arc::new(library));
         let mut text = Vec::new();
-        super::super::gltf_write::write_gltf(&mut text, &mesh, false, Some(&out)).unwrap();
+        super::super::gltf::write::write_gltf(&mut text, &mesh, false, Some(&out)).unwrap();
         let text = String::from_utf8(text).unwrap();
         assert!(text.contains("emissiveTexture") && !text.contains("Ns 96") && !text.contains("extras"), "{text}");
         std::fs::remove_dir_all(dir).unwrap();

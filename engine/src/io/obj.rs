@@ -14,7 +14,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::ReadLimits;
+use super::options::{ReadLimits, Target};
 use super::triangulate::triangulate_polygon;
 use crate::error::MeshError;
 use crate::mesh::{CornerAttributes, Mesh, NO_MATERIAL};
@@ -140,14 +140,14 @@ pub fn read_obj(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadL
                         format!("face has {} corners; a face needs at least 3", polygon.len()),
                     ));
                 }
-                if polygon.len() > super::MAX_POLYGON_CORNERS {
+                if polygon.len() > super::options::MAX_POLYGON_CORNERS {
                     return Err(MeshError::parse(
                         path,
                         format!("line {line}"),
                         format!(
                             "face has {} corners; at most {} are accepted",
                             polygon.len(),
-                            super::MAX_POLYGON_CORNERS
+                            super::options::MAX_POLYGON_CORNERS
                         ),
                     ));
                 }
@@ -276,6 +276,21 @@ pub fn read_obj(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadL
 /// named by `usemtl`; their MTL file is written only beside a file ([`super::write_mesh`]).
 pub fn write_obj(out: &mut impl Write, mesh: &Mesh) -> std::io::Result<()> {
     write_obj_with_library(out, mesh, None)
+}
+
+/// The codec's writer: [`write_obj`], and when the target is a file and the mesh has materials,
+/// their MTL file beside it (`OUT.mtl`, named by `mtllib`) with their textures.
+pub(super) fn write_obj_to(mut out: &mut dyn Write, mesh: &Mesh, target: &Target) -> std::io::Result<()> {
+    if let (Some(path), Some(_), Some(library)) = (target.path, &mesh.corners.materials, &mesh.corners.library)
+        && !library.materials.is_empty()
+    {
+        let mtl = path.with_extension("mtl");
+        super::mtl::write_library(&mtl, library)
+            .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", mtl.display())))?;
+        let name = mtl.file_name().map(|n| n.to_string_lossy().into_owned());
+        return write_obj_with_library(&mut out, mesh, name.as_deref());
+    }
+    write_obj_with_library(&mut out, mesh, None)
 }
 
 /// [`write_obj`], the materials' MTL file named by `mtllib` when given.

@@ -8,7 +8,7 @@
 
 use std::path::Path;
 
-use super::ReadLimits;
+use super::options::ReadLimits;
 use super::triangulate::triangulate_face;
 use crate::error::MeshError;
 use crate::mesh::Mesh;
@@ -115,11 +115,11 @@ pub fn read_off(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
                 format!("face {f} has {corners} corners; a face needs at least 3"),
             ));
         }
-        if corners > super::MAX_POLYGON_CORNERS {
+        if corners > super::options::MAX_POLYGON_CORNERS {
             return Err(MeshError::parse(
                 path,
                 at(),
-                format!("face {f} has {corners} corners; at most {} are accepted", super::MAX_POLYGON_CORNERS),
+                format!("face {f} has {corners} corners; at most {} are accepted", super::options::MAX_POLYGON_CORNERS),
             ));
         }
         // n corners make n − 2 triangles: checked before any work on them.

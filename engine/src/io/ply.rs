@@ -7,7 +7,7 @@
 use std::io::Write;
 use std::path::Path;
 
-use super::ReadLimits;
+use super::options::ReadLimits;
 use super::triangulate::triangulate_face;
 use crate::error::MeshError;
 use crate::mesh::{CornerAttributes, Mesh};
@@ -445,11 +445,11 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
                 format!("refers to vertex {bad} but the file has {vertex_count} vertices"),
             ));
         }
-        if indices.len() > super::MAX_POLYGON_CORNERS {
+        if indices.len() > super::options::MAX_POLYGON_CORNERS {
             return Err(MeshError::parse(
                 path,
                 format!("face {face}"),
-                format!("has {} corners; at most {} are accepted", indices.len(), super::MAX_POLYGON_CORNERS),
+                format!("has {} corners; at most {} are accepted", indices.len(), super::options::MAX_POLYGON_CORNERS),
             ));
         }
         // Checked before triangulating: n corners always make n − 2 triangles.

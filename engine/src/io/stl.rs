@@ -12,7 +12,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use super::ReadLimits;
+use super::options::ReadLimits;
 use crate::error::MeshError;
 use crate::mesh::Mesh;
 

@@ -9,7 +9,7 @@ use std::collections::HashMap;
 
 use super::bits::{BitReader, BitWriter, OutOfBits, Rice, width_for};
 use super::grid::{Grid, MAX_BITS, Quantization, from_octahedral, octahedral};
-use super::{
+use super::header::{
     ATTRIBUTE_COLOR, ATTRIBUTE_MATERIAL, ATTRIBUTE_NORMAL, ATTRIBUTE_SKIN, ATTRIBUTE_TANGENT, ATTRIBUTE_UV,
     ATTRIBUTE_UV_ORIGIN_TOP, ATTRIBUTE_UV1, Reader, put_varint,
 };
@@ -560,7 +560,7 @@ pub(super) type DecodedAttributes = (PmAttributes, u8, Option<Grid<2>>, Option<G
 /// Reads what [`encode_attributes`] wrote, replaying the splits of `pm` (already read).
 pub(super) fn decode_attributes(r: &mut Reader, pm: &ProgressiveMesh) -> Result<DecodedAttributes, MeshError> {
     let mask = r.take(1)?[0];
-    super::check_mask(r, mask)?;
+    super::header::check_mask(r, mask)?;
     let layout = Layout::of(mask);
     let normal_bits = if layout.normal || layout.tangent {
         let bits = r.take(1)?[0];

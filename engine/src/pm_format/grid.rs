@@ -1,7 +1,7 @@
 //! The integer grids of the compact `.pm` form: positions, texture coordinates and colours on
 //! ranges split into `2^bits − 1` steps, normals as octahedral coordinates.
 
-use super::Reader;
+use super::header::Reader;
 use crate::error::MeshError;
 use crate::pm::ProgressiveMesh;
 

@@ -28,10 +28,9 @@
 
 use glam::DVec3;
 
-use super::Outcome;
 use super::classify::VertexKind;
 use super::kernel::{NONE, State};
-use super::options::{Metric, SimplifyOptions};
+use super::options::{Metric, Outcome, SimplifyOptions};
 use super::run::{self, Run};
 use crate::error::MeshError;
 use crate::mesh::{DistanceUnits, Mesh};

@@ -470,3 +470,20 @@ pub(crate) enum Refusal {
     /// Rule 7: a texture-space triangle would flip or lose its area.
     UvFlip,
 }
+
+/// What a run made, as [`super::simplify`] reports it.
+pub(super) struct Outcome {
+    pub(super) mesh: Mesh,
+    pub(super) progressive: Option<ProgressiveMesh>,
+    pub(super) collapses: usize,
+    pub(super) holes_closed: usize,
+    pub(super) stop_reason: StopReason,
+    pub(super) max_collapse_error: f64,
+    pub(super) refused: Refusals,
+    pub(super) frozen_vertices: usize,
+    pub(super) parts_removed: usize,
+    pub(super) dropped_duplicate_faces: usize,
+    pub(super) back_faces: usize,
+    pub(super) halves: bool,
+    pub(super) distance_term: f64,
+}

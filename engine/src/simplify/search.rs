@@ -7,7 +7,7 @@ use crate::hausdorff::{HausdorffOptions, HausdorffReport, hausdorff};
 use crate::mesh::Mesh;
 
 use super::options::{Metric, Simplified, SimplifyOptions};
-use super::simplify;
+use super::pipeline::simplify;
 
 /// Outcome of [`simplify_search_w`].
 #[derive(Debug, Clone)]

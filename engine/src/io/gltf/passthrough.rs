@@ -9,9 +9,8 @@ use glam::{DMat3, DMat4, DVec3};
 use gltf::Semantic;
 use serde_json::{Value, json};
 
-use super::gltf::{finite, quantized};
-use super::gltf_checks as checks;
-use super::gltf_write;
+use super::accessor::{self, finite, quantized};
+use super::checks;
 use crate::mesh::{OtherPrimitive, RigAccessor};
 
 /// Accessor `index`'s elements packed one after another, with its JSON (`bufferView`, `byteOffset`
@@ -52,11 +51,11 @@ fn floats<const N: usize>(name: &str, values: Vec<[f32; N]>, bounds: bool) -> Re
     let kind = ["SCALAR", "VEC2", "VEC3", "VEC4"][N - 1];
     let mut json = json!({ "componentType": 5126, "count": values.len(), "type": kind });
     if bounds && !values.is_empty() {
-        let (min, max) = gltf_write::bounds(&values);
+        let (min, max) = accessor::bounds(&values);
         json["min"] = json!(min.to_vec());
         json["max"] = json!(max.to_vec());
     }
-    Ok(RigAccessor { json, bytes: gltf_write::floats(values.into_iter()) })
+    Ok(RigAccessor { json, bytes: accessor::floats(values.into_iter()) })
 }
 
 /// Point or line primitive `primitive`, placed by `world`; `raw`: the document's JSON.
@@ -140,52 +139,3 @@ pub(super) fn read(
     })
 }
 
-/// Whether `other` can be written as it is: a mode that is not surface, a material the
-/// library has, each accessor's bytes its count of elements, every index below the count of
-/// positions.
-pub(crate) fn check(other: &OtherPrimitive, materials: usize) -> Result<(), String> {
-    if other.mode > 3 {
-        return Err(format!("mode {} is not a point or line mode", other.mode));
-    }
-    if let Some(m) = other.material.filter(|&m| m as usize >= materials) {
-        return Err(format!("names material {m}; there are {materials}"));
-    }
-    let size = |a: &RigAccessor| -> Option<(usize, usize)> {
-        let components = match a.json.get("type")?.as_str()? {
-            "SCALAR" => 1,
-            "VEC2" => 2,
-            "VEC3" => 3,
-            "VEC4" => 4,
-            _ => return None,
-        };
-        let width = match a.json.get("componentType")?.as_u64()? {
-            5120 | 5121 => 1,
-            5122 | 5123 => 2,
-            5125 | 5126 => 4,
-            _ => return None,
-        };
-        Some((usize::try_from(a.json.get("count")?.as_u64()?).ok()?, components * width))
-    };
-    let mut positions = None;
-    for (name, a) in &other.attributes {
-        let (count, element) = size(a).ok_or_else(|| format!("{name}: an accessor glTF does not define"))?;
-        if count.checked_mul(element) != Some(a.bytes.len()) {
-            return Err(format!("{name}: {} bytes for {count} elements of {element}", a.bytes.len()));
-        }
-        if name == "POSITION" {
-            positions = Some(count);
-        }
-    }
-    let positions = positions.ok_or("no POSITION")?;
-    if let Some(indices) = &other.indices {
-        let (count, width) =
-            size(indices).filter(|&(_, w)| matches!(w, 1 | 2 | 4)).ok_or("indices of no integer type")?;
-        if count.checked_mul(width) != Some(indices.bytes.len()) {
-            return Err(format!("{} bytes of indices for {count}", indices.bytes.len()));
-        }
-        if let Some(bad) = indices.bytes.chunks_exact(width).map(checks::unsigned_le).find(|&i| i >= positions) {
-            return Err(format!("index {bad} is out of range ({positions} positions)"));
-        }
-    }
-    Ok(())
-}

@@ -10,7 +10,7 @@
 //! What is left out is said. glTF splits a vertex wherever its attributes differ (seams,
 //! hard edges) and exporters often between primitives too: the cut is joined again
 //! ([`Mesh::join_cut_seams`]), so the surface is one piece with seams, not cut open.
-//! POINTS and LINES primitives are not surface: carried as they were (`super::gltf_other`).
+//! POINTS and LINES primitives are not surface: carried as they were (`super::passthrough`).
 //!
 //! Untrusted input: every accessor and buffer view is checked against the bytes that back it
 //! before it is read, counts against the limits before anything is allocated from them, and
@@ -24,8 +24,9 @@ use base64::Engine as _;
 use glam::{DMat3, DMat4, DVec3};
 use gltf::mesh::Mode;
 
-use super::ReadLimits;
-use super::gltf_checks as checks;
+use super::accessor::{finite, quantized};
+use super::checks;
+use crate::io::options::ReadLimits;
 use crate::error::MeshError;
 use crate::mesh::{CornerAttributes, Image, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL, Rig};
 
@@ -128,7 +129,7 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
                         )
                     })?;
                     let file = folder.join(uri.replace("%20", " "));
-                    super::read_referenced(&file).map_err(|e| err(&at, format!("'{}': {e}", file.display())))?
+                    crate::io::files::read_referenced(&file).map_err(|e| err(&at, format!("'{}': {e}", file.display())))?
                 }
             }
         };
@@ -246,7 +247,7 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
                 Some(raw) => raw,
                 None => raw.insert(raw_json(json).map_err(|reason| err("document", reason))?),
             };
-            let read = || super::gltf_other::read(&primitive, raw, document, &buffers, world);
+            let read = || super::passthrough::read(&primitive, raw, document, &buffers, world);
             let other = std::panic::catch_unwind(std::panic::AssertUnwindSafe(read))
                 .map_err(|_| err(&at, "could not be read (malformed accessor data)".into()))?
                 .map_err(|reason| err(&at, reason))?;
@@ -380,7 +381,7 @@ fn rig(
             *value = k.into();
             return Ok(());
         }
-        let packed = super::gltf_other::packed(raw, document, buffers, index as usize)
+        let packed = super::passthrough::packed(raw, document, buffers, index as usize)
             .map_err(|reason| format!("skins and animations ({reason})"))?;
         accessors.push(packed);
         carried.insert(index, accessors.len() - 1);
@@ -480,15 +481,6 @@ fn validated_document(root: gltf::json::Root) -> Result<gltf::Document, gltf::Er
 /// Whether a primitive mode describes a surface.
 fn is_surface(mode: Mode) -> bool {
     matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan)
-}
-
-/// `Err` naming the first of `values` (an attribute `what`'s, per vertex) that is not a finite
-/// number.
-pub(super) fn finite<const N: usize>(what: &str, values: &[[f32; N]]) -> Result<(), String> {
-    match values.iter().position(|v| v.iter().any(|c| !c.is_finite())) {
-        Some(vertex) => Err(format!("{what} of vertex {vertex} is not a finite number")),
-        None => Ok(()),
-    }
 }
 
 /// Reads one primitive, placed by `world`; joints and weights when it has them and `joint_count`
@@ -627,68 +619,6 @@ fn read_primitive(
     let weights = weights.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let material = primitive.material().index().map_or(NO_MATERIAL, |m| m as u32);
     Ok(Part { positions, triangles, normals, tangents, uvs, uvs1, colors, joints, weights, material, mended })
-}
-
-/// A primitive's attribute `semantic` when it is stored as integers (KHR_mesh_quantization, and
-/// texture coordinates in core glTF), converted to floats: normalised values to [0, 1] or [−1, 1]
-/// as glTF defines them, others as they are. `None` when the primitive stores it as floats (or
-/// not at all): the crate's reader reads those.
-pub(super) fn quantized<const N: usize>(
-    primitive: &gltf::Primitive,
-    semantic: &gltf::Semantic,
-    buffers: &[Vec<u8>],
-) -> Result<Option<Vec<[f32; N]>>, String> {
-    use gltf::accessor::DataType;
-    let Some(accessor) = primitive.get(semantic) else { return Ok(None) };
-    let kind = accessor.data_type();
-    if kind == DataType::F32 {
-        return Ok(None);
-    }
-    let name = semantic.to_string();
-    if accessor.dimensions().multiplicity() != N {
-        return Err(format!("{name} has {} components, not {N}", accessor.dimensions().multiplicity()));
-    }
-    if accessor.sparse().is_some() {
-        return Err(format!("{name} is a sparse quantized accessor, which meshlod does not read"));
-    }
-    let width = kind.size();
-    let normalized = accessor.normalized();
-    // One component: its integer, scaled as glTF's normalised types are.
-    let value = |b: &[u8]| -> f32 {
-        match kind {
-            DataType::I8 => {
-                let x = b[0] as i8 as f32;
-                if normalized { (x / 127.0).max(-1.0) } else { x }
-            }
-            DataType::U8 => {
-                let x = b[0] as f32;
-                if normalized { x / 255.0 } else { x }
-            }
-            DataType::I16 => {
-                let x = i16::from_le_bytes([b[0], b[1]]) as f32;
-                if normalized { (x / 32767.0).max(-1.0) } else { x }
-            }
-            DataType::U16 => {
-                let x = u16::from_le_bytes([b[0], b[1]]) as f32;
-                if normalized { x / 65535.0 } else { x }
-            }
-            DataType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
-            DataType::F32 => unreachable!("floats are read by the crate"),
-        }
-    };
-    let count = accessor.count();
-    let Some(view) = accessor.view() else { return Ok(Some(vec![[0.0; N]; count])) };
-    // In range: `gltf_checks::accessor` checked every element against its view.
-    let stride = view.stride().unwrap_or(accessor.size());
-    let data = &buffers[view.buffer().index()][view.offset()..view.offset() + view.length()];
-    Ok(Some(
-        (0..count)
-            .map(|i| {
-                let at = accessor.offset() + i * stride;
-                std::array::from_fn(|k| value(&data[at + k * width..]))
-            })
-            .collect(),
-    ))
 }
 
 /// Joins the parts into one mesh. Texture coordinates and colours are kept when some part has

@@ -20,12 +20,14 @@
 //! texture); colours as normalised 16-bit integers (core glTF).
 
 use std::io::Write;
-use std::path::{Component, Path, PathBuf};
+use std::path::Path;
 
 use base64::Engine as _;
 use serde_json::{Value, json};
 
-use super::WriteOptions;
+use super::accessor::{bounds, floats};
+use crate::io::files::{read_referenced, relative_uri, sniff_image};
+use crate::io::options::WriteOptions;
 use crate::mesh::{ImageSource, MaterialLibrary, Mesh, NO_MATERIAL, OtherPrimitive};
 
 const ARRAY_BUFFER: u32 = 34962;
@@ -115,22 +117,6 @@ fn quantized_positions(positions: &[[f32; 3]], min: [f32; 3], max: [f32; 3]) -> 
         bytes.extend_from_slice(&[0, 0]);
     }
     (bytes, qmin, qmax, step)
-}
-
-pub(super) fn floats<const N: usize>(values: impl Iterator<Item = [f32; N]>) -> Vec<u8> {
-    values.flat_map(|v| v.into_iter().flat_map(f32::to_le_bytes)).collect()
-}
-
-/// The per-component minimum and maximum of `values` (infinities when there are none).
-pub(super) fn bounds<const N: usize>(values: &[[f32; N]]) -> ([f32; N], [f32; N]) {
-    let (mut min, mut max) = ([f32::INFINITY; N], [f32::NEG_INFINITY; N]);
-    for v in values {
-        for k in 0..N {
-            min[k] = min[k].min(v[k]);
-            max[k] = max[k].max(v[k]);
-        }
-    }
-    (min, max)
 }
 
 /// Writes `mesh` as glTF: GLB when `binary`, else JSON with a data-URI buffer. `folder`: where the
@@ -508,7 +494,7 @@ fn add_library(
         }
         let bytes = match &image.source {
             ImageSource::Bytes(bytes) => Some(bytes.clone()),
-            ImageSource::File(path) => super::read_referenced(path).ok(),
+            ImageSource::File(path) => read_referenced(path).ok(),
             ImageSource::Uri(_) => None,
         };
         let mime = bytes.as_deref().and_then(sniff_image).map(str::to_string).or_else(|| image.mime_type.clone());
@@ -560,64 +546,6 @@ fn add_library(
     put("extensionsUsed", strings(&library.extensions_used));
     put("extensionsRequired", strings(&library.extensions_required));
     Ok(())
-}
-
-/// The media type of image bytes, from their magic numbers.
-pub(super) fn sniff_image(bytes: &[u8]) -> Option<&'static str> {
-    if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
-        Some("image/png")
-    } else if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
-        Some("image/jpeg")
-    } else if bytes.len() >= 12 && &bytes[..4] == b"RIFF" && &bytes[8..12] == b"WEBP" {
-        Some("image/webp")
-    } else if bytes.starts_with(b"\xABKTX 20\xBB\r\n\x1a\n") {
-        Some("image/ktx2")
-    } else {
-        None
-    }
-}
-
-/// `path` as a URI relative to `folder` (both made absolute first), spaces and the like escaped.
-fn relative_uri(path: &Path, folder: Option<&Path>) -> Option<String> {
-    let joined = relative_path(path, folder?)?;
-    let mut uri = String::new();
-    for ch in joined.chars() {
-        match ch {
-            'A'..='Z' | 'a'..='z' | '0'..='9' | '-' | '_' | '.' | '~' | '/' => uri.push(ch),
-            other => {
-                let mut utf8 = [0u8; 4];
-                for byte in other.encode_utf8(&mut utf8).bytes() {
-                    uri.push_str(&format!("%{byte:02X}"));
-                }
-            }
-        }
-    }
-    Some(uri)
-}
-
-/// `path` relative to `folder` (both made absolute first, `.` and `..` resolved by hand: the file
-/// may not exist), its parts joined by `/`.
-pub(super) fn relative_path(path: &Path, folder: &Path) -> Option<String> {
-    let absolute = |p: &Path| -> Option<PathBuf> {
-        let p = if p.is_absolute() { p.to_path_buf() } else { std::env::current_dir().ok()?.join(p) };
-        let mut out = PathBuf::new();
-        for c in p.components() {
-            match c {
-                Component::ParentDir => {
-                    out.pop();
-                }
-                Component::CurDir => {}
-                other => out.push(other),
-            }
-        }
-        Some(out)
-    };
-    let (target, base) = (absolute(path)?, absolute(folder)?);
-    let (t, b): (Vec<_>, Vec<_>) = (target.components().collect(), base.components().collect());
-    let common = t.iter().zip(&b).take_while(|(x, y)| x == y).count();
-    let mut parts: Vec<String> = vec!["..".into(); b.len() - common];
-    parts.extend(t[common..].iter().map(|c| c.as_os_str().to_string_lossy().into_owned()));
-    Some(parts.join("/"))
 }
 
 #[cfg(test)]

@@ -3,6 +3,8 @@
 //! accessor index out of range, indices stored as floats, weights as ints), and a panic inside
 //! them is no way to refuse a file. Each check names the element it refuses.
 
+use super::accessor::unsigned_le;
+
 /// Every accessor and material a mesh primitive names exists: `Err((element, reason))` naming
 /// the first that does not.
 pub(super) fn primitive_references(root: &gltf::json::Root) -> Result<(), (String, String)> {
@@ -173,9 +175,4 @@ pub(super) fn glb_header(bytes: &[u8]) -> Result<(), String> {
         return Err(format!("declares {declared} bytes, but the file holds {} (and the header 12)", bytes.len()));
     }
     Ok(())
-}
-
-/// An unsigned integer stored little-endian in `bytes` (at most 8 of them).
-pub(super) fn unsigned_le(bytes: &[u8]) -> usize {
-    bytes.iter().rev().fold(0usize, |x, &byte| (x << 8) | usize::from(byte))
 }
