@@ -97,7 +97,12 @@ impl OtherPrimitive {
             if count.checked_mul(width) != Some(indices.bytes.len()) {
                 return Err(format!("{} bytes of indices for {count}", indices.bytes.len()));
             }
-            if let Some(bad) = indices.bytes.chunks_exact(width).map(|b| b.iter().rev().fold(0usize, |x, &byte| (x << 8) | usize::from(byte))).find(|&i| i >= positions) {
+            if let Some(bad) = indices
+                .bytes
+                .chunks_exact(width)
+                .map(|b| b.iter().rev().fold(0usize, |x, &byte| (x << 8) | usize::from(byte)))
+                .find(|&i| i >= positions)
+            {
                 return Err(format!("index {bad} is out of range ({positions} positions)"));
             }
         }

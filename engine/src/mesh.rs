@@ -438,11 +438,9 @@ impl CornerAttributes {
         }
         if let Some(library) = &self.library {
             for (i, other) in library.other_primitives.iter().enumerate() {
-                other.check(library.materials.len()).map_err(|reason| {
-                    MeshError::InvalidParameter {
-                        name: "other_primitives",
-                        reason: format!("point or line primitive {i}: {reason}"),
-                    }
+                other.check(library.materials.len()).map_err(|reason| MeshError::InvalidParameter {
+                    name: "other_primitives",
+                    reason: format!("point or line primitive {i}: {reason}"),
                 })?;
             }
         }

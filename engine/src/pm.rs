@@ -323,8 +323,7 @@ impl ProgressiveMesh {
         for s in &splits {
             face_counts.push(face_counts.last().expect("non-empty") + s.added_faces() as u32);
         }
-        let pm =
-            ProgressiveMesh { base, splits, face_counts, input_vertex: None, attributes: None };
+        let pm = ProgressiveMesh { base, splits, face_counts, input_vertex: None, attributes: None };
         let mut cursor = LodCursor::new(&pm);
         cursor.seek_level(pm.splits.len())?;
         Ok(pm)

@@ -138,11 +138,12 @@ pub fn unwritten_warning(format: MeshFormat, mesh: &Mesh) -> Option<String> {
 /// known extension, and a folder that exists.
 pub fn output_format(path: impl AsRef<Path>) -> Result<MeshFormat, MeshError> {
     let path = path.as_ref();
-    let format =
-        MeshFormat::from_extension(path).filter(|f| codec(*f).write.is_some()).ok_or_else(|| MeshError::UnsupportedFormat {
+    let format = MeshFormat::from_extension(path).filter(|f| codec(*f).write.is_some()).ok_or_else(|| {
+        MeshError::UnsupportedFormat {
             path: PathBuf::from(path),
             reason: "output extension must be .obj, .ply, .gltf or .glb (STL and OFF are read only)".into(),
-        })?;
+        }
+    })?;
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty())
         && !parent.is_dir()
     {

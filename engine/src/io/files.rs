@@ -82,4 +82,3 @@ pub(crate) fn relative_path(path: &Path, folder: &Path) -> Option<String> {
     parts.extend(t[common..].iter().map(|c| c.as_os_str().to_string_lossy().into_owned()));
     Some(parts.join("/"))
 }
-

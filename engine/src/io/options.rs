@@ -72,7 +72,7 @@ impl ReadLimits {
 pub struct WriteOptions {
     /// glTF only: the vertex data as integers under `KHR_mesh_quantization` (positions on a 16-bit
     /// grid, normals and tangents in 8 bits, texture coordinates and colours in 16;
-    /// [`write_gltf_with`]), about half the bytes per vertex.
+    /// [`super::write_gltf_with`]), about half the bytes per vertex.
     pub quantize: bool,
 }
 

@@ -1,7 +1,6 @@
 //! The materials section of a `.pm` file: the materials, textures, samplers and images (and a
 //! skinned asset's rig, and the point and line primitives carried beside the mesh) as JSON.
 
-
 use super::header::Reader;
 use crate::error::MeshError;
 use crate::mesh::{Image, ImageSource, MaterialLibrary, NO_MATERIAL, OtherPrimitive, Rig, RigAccessor};
@@ -220,4 +219,3 @@ pub(super) fn read_library(r: &mut Reader, a: &mut PmAttributes) -> Result<(), M
     a.values.library = Some(std::sync::Arc::new(library));
     Ok(())
 }
-

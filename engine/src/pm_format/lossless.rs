@@ -299,4 +299,3 @@ pub(super) fn decode(
         None => Ok(pm),
     }
 }
-

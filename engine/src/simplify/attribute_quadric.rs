@@ -19,7 +19,9 @@
 
 use glam::DVec3;
 
-use super::kernel::{NONE, State};
+use super::seams::SeamCarrier;
+use super::topology::Topology;
+use super::vertex::NONE;
 use crate::mesh::Mesh;
 
 /// At most two texture coordinates, three normal and four colour dimensions.
@@ -185,24 +187,25 @@ fn add_outer(q: &mut [f64; MAX_ROW], g: DVec3, gw: DVec3, d: f64, dw: f64) {
     q[9] += dw * d;
 }
 
-impl State<'_> {
+impl WedgeQuadrics {
     /// The appearance part of collapsing `b` into `a` at `p`: over each pair of b's wedge and the
     /// wedge of a it goes into, their summed quadric at `p` with a's values (0 without attribute
     /// quadrics). A collapse that rule 7 refuses gets some number: the legality check refuses it.
     #[inline]
-    pub(super) fn attribute_error(&self, a: u32, b: u32, p: DVec3) -> f64 {
-        let Some(q) = &self.wedges else { return 0.0 };
+    pub(crate) fn attribute_error(&self, topo: &Topology, seams: &SeamCarrier, a: u32, b: u32, p: DVec3) -> f64 {
+        let q = self;
         let (wa, wb) = (q.single[a as usize], q.single[b as usize]);
         if wa != NONE && wb != NONE {
             return q.pair_error(wa, wb, p, wa);
         }
         // A seam or an anchor: the pairs are the two ends' wedges in the edge's faces.
-        let (shared, count) = self.edge_corners(a, b);
+        let (shared, count) = topo.edge_corners(a, b);
         let mut total = 0.0;
         let mut last = (NONE, NONE);
         for corner in &shared[..count.min(2)] {
             let f = corner.face;
-            let pair = (q.wedge_of[self.source_at(f, a) as usize], q.wedge_of[self.source_at(f, b) as usize]);
+            let pair =
+                (q.wedge_of[seams.source_at(topo, f, a) as usize], q.wedge_of[seams.source_at(topo, f, b) as usize]);
             if pair != last {
                 total += q.pair_error(pair.0, pair.1, p, pair.0);
                 last = pair;
@@ -213,8 +216,8 @@ impl State<'_> {
 
     /// After rule 7's mapping `sides` of b's values (input corners) to a's: each of b's wedge
     /// quadrics added into the wedge of a it went into.
-    pub(super) fn merge_wedges(&mut self, sides: [(u32, u32); 2]) {
-        let Some(q) = &mut self.wedges else { return };
+    pub(crate) fn merge(&mut self, sides: [(u32, u32); 2]) {
+        let q = self;
         let pairs = sides.map(|(b, a)| (q.wedge_of[a as usize], q.wedge_of[b as usize]));
         q.absorb(pairs[0].0, pairs[0].1);
         if pairs[1] != pairs[0] {

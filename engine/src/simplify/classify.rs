@@ -8,32 +8,10 @@ use std::borrow::Cow;
 use crate::fan::{Corner, FAN_INLINE, FanSlot};
 use crate::mesh::Mesh;
 
-use super::kernel::{NONE, State};
-use super::options::BoundaryMode;
+use super::vertex::{NONE, VertexKind};
 
 /// Fans up to this many faces are scanned by counting ([`scan_small_fan`]); larger ones by sorting.
 pub(super) const SMALL_FAN: usize = 16;
-
-/// Vertex classification, fixed at the start except for anchors released
-/// ([`State::relax`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub(crate) enum VertexKind {
-    #[default]
-    Interior,
-    Boundary,
-    /// Non-manifold or inconsistently oriented: never moves or disappears, and takes in a neighbour
-    /// only where its edges to the collapse's opposite vertices are manifold and consistently
-    /// oriented (rule 1 of the module doc).
-    Frozen,
-    /// Never moves or disappears, but a neighbour may collapse into it (along the boundary, for a
-    /// boundary neighbour): where three or more sets of attribute values meet, a locked seam's
-    /// vertices and a locked border's. Assigned by the kernel, not by the scan; released when
-    /// collapses leave its faces fewer sets of values ([`State::relax`]).
-    Anchored,
-    /// Never moves, disappears or takes in a neighbour: a vertex of the band along the cut between
-    /// two halves of a large mesh while they are simplified apart (`super::halves`).
-    Locked,
-}
 
 /// [`prepare`], borrowing the mesh itself when there is nothing to drop (the usual input); the
 /// input index of each vertex is then the identity.
@@ -428,66 +406,6 @@ fn single_fan(fan: &[Corner], by_next: &mut Vec<(u32, u32)>, by_prev: &mut Vec<(
     reached == n
 }
 
-impl State<'_> {
-    /// Looks again at vertex `v` after a collapse took faces from it: whether a rule that held it
-    /// because of its sets of values no longer does, in which case its edges are to be ranked
-    /// again. Collapses only ever take sets away from a vertex (a removed vertex's corners take
-    /// the survivor's values), so what this lifts never comes back.
-    ///
-    /// - An anchor (three or more sets met at the start) whose faces now carry exactly two sets,
-    ///   with the same texture coordinates, is released: an ordinary vertex again (interior or
-    ///   boundary, as its fan is closed or not), still on its seam, so it moves along it. Where the
-    ///   two sets differ in normals only (a hard edge through the vertex, the texture continuous)
-    ///   it moves along that edge as any vertex of the edge does: on CesiumMan, whose anchors are
-    ///   mostly of that kind, the position error at 10% fell to a third and the texture error to a
-    ///   quarter (docs/attributes-report.md). The other anchors stay, as measured: released where
-    ///   the two sets differ in texture coordinates, fuze's seam vertices slid along the seam and
-    ///   nearly doubled its texture error; released where one set is left, Fox's position error
-    ///   at 74 faces rose from 0.154 to 0.200.
-    /// - A seam vertex whose faces now carry one set is off the seam: inside one chart, it collapses
-    ///   as the chart's other vertices do (pirate's texture error 5.7 → 5.3 texels).
-    ///
-    /// Nothing with locked seams, and no anchor with locked borders: those stay whatever their
-    /// corners.
-    pub(super) fn relax(&mut self, v: u32) -> bool {
-        let kind = self.vertices[v as usize].kind;
-        let anchor = kind == VertexKind::Anchored && self.options.boundary != BoundaryMode::Lock;
-        let seam = self.on_seam[v as usize] && matches!(kind, VertexKind::Interior | VertexKind::Boundary);
-        if self.options.lock_seams || !(anchor || seam) {
-            return false;
-        }
-        // A corner of each set met: no more than a seam vertex may lose (one) or an anchor keep
-        // (two) when the rule is to let go; one more settles it.
-        let most = if seam { 1 } else { 2 };
-        let fan = &self.fans[v as usize];
-        let mut sets = [NONE; 2];
-        let mut count = 0;
-        for corner in fan {
-            let source = self.source_at(corner.face, v);
-            if sets[..count].iter().any(|&s| self.same_values(s, source)) {
-                continue;
-            }
-            if count == most {
-                return false;
-            }
-            sets[count] = source;
-            count += 1;
-        }
-        if seam {
-            self.on_seam[v as usize] = false;
-            return true;
-        }
-        let bits = |uv: &Option<Vec<[f32; 2]>>, k: u32| uv.as_ref().map(|uv| uv[k as usize].map(f32::to_bits));
-        let uvs = |k: u32| (bits(&self.attributes.uvs, k), bits(&self.attributes.uvs1, k));
-        if count != 2 || uvs(sets[0]) != uvs(sets[1]) {
-            return false;
-        }
-        let closed = fan.iter().all(|c| fan.iter().any(|d| d.prev == c.next));
-        self.vertices[v as usize].kind = if closed { VertexKind::Interior } else { VertexKind::Boundary };
-        true
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -546,7 +464,7 @@ mod tests {
         let classes: Vec<VertexKind> = state.vertices.iter().map(|v| v.kind).collect();
         assert_eq!(classes, kind, "{name}: vertex classes");
         assert_eq!(edges, reference_edges, "{name}: edge list");
-        let Scan { boundary_edges, .. } = scan_fans(&state.fans);
+        let Scan { boundary_edges, .. } = scan_fans(&state.topo.fans);
         let boundary: Vec<(u32, u32)> = boundary_edges.iter().map(|&(a, b, _)| (a, b)).collect();
         assert_eq!(boundary, reference_boundary, "{name}: boundary edges");
     }
@@ -559,7 +477,7 @@ mod tests {
         let (state, _) = State::new(&mesh, &options);
         let mut scratch = LargeFanScratch::default();
         let empty = || Scan { kind: Vec::new(), edges: Vec::new(), boundary_edges: Vec::new() };
-        for (v, fan) in state.fans.iter().enumerate().filter(|(_, fan)| fan.len() <= SMALL_FAN) {
+        for (v, fan) in state.topo.fans.iter().enumerate().filter(|(_, fan)| fan.len() <= SMALL_FAN) {
             let (mut small, mut large) = (empty(), empty());
             let small_kind = scan_small_fan(v as u32, fan, &mut small);
             let large_kind = scan_large_fan(v as u32, fan, &mut large, &mut scratch);
@@ -671,7 +589,7 @@ mod tests {
         let options = SimplifyOptions::default();
         let (state, _) = State::new(&cases[9].1, &options);
         let mut scan = Scan { kind: Vec::new(), edges: Vec::new(), boundary_edges: Vec::new() };
-        let apex = &state.fans[0];
+        let apex = &state.topo.fans[0];
         assert_eq!(
             scan_closed_fan(0, apex.inline_slots().expect("six faces are inline"), apex.len(), &mut scan),
             Some(VertexKind::Frozen),
@@ -705,8 +623,8 @@ mod tests {
         let source = state.source_at(3 * from, 0);
         for &sector in sectors {
             let face = 3 * sector as usize;
-            let k = state.triangles[face].iter().position(|&v| v == 0).unwrap();
-            state.corner_source[3 * face + k] = source;
+            let k = state.topo.triangles[face].iter().position(|&v| v == 0).unwrap();
+            state.seams.corner_source[3 * face + k] = source;
         }
     }
 
@@ -723,7 +641,7 @@ mod tests {
             assert_eq!(state.relax(0), released, "texture coordinates split: {uv_split}");
             if released {
                 assert_eq!(state.vertices[0].kind, VertexKind::Interior, "its fan is closed");
-                assert!(state.on_seam[0], "still on the edge between its two sets");
+                assert!(state.seams.on_seam[0], "still on the edge between its two sets");
             } else {
                 assert_eq!(state.vertices[0].kind, VertexKind::Anchored);
             }
@@ -748,10 +666,10 @@ mod tests {
         let (mut state, _) = State::new(&halves, &options);
         state.carry_attributes(&halves);
         assert_eq!(state.vertices[0].kind, VertexKind::Interior);
-        assert!(state.on_seam[0] && !state.relax(0), "two sets: on the seam");
+        assert!(state.seams.on_seam[0] && !state.relax(0), "two sets: on the seam");
         centre_takes_values(&mut state, &[3, 4, 5], 0);
         assert!(state.relax(0), "one set left");
-        assert!(!state.on_seam[0] && !state.relax(0));
+        assert!(!state.seams.on_seam[0] && !state.relax(0));
         // With seams locked an anchor stays one, whatever its corners.
         let locked = SimplifyOptions { lock_seams: true, ..SimplifyOptions::default() };
         let (mut state, _) = State::new(&mesh, &locked);

@@ -1,17 +1,10 @@
 //! The collapse cost of an edge: QFVP's normal factor, Melax's curvature term, and the candidate
 //! the metric prefers ([`State::evaluate`]), its placement chosen in `placement.rs`.
 
-use super::kernel::{State, VertexData, to_f32};
+use super::candidate::Candidate;
+use super::kernel::State;
 use super::placement::{Choice, Keep};
-
-/// A collapse ready to apply: `removed` merges into `survivor`, which moves to `position`.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Candidate {
-    pub(crate) cost: f64,
-    pub(crate) survivor: u32,
-    pub(crate) removed: u32,
-    pub(crate) position: [f32; 3],
-}
+use super::vertex::{VertexData, to_f32};
 
 impl State<'_> {
     /// The collapse of edge {a, b} the metric prefers, or `None` if the rules forbid every
@@ -34,7 +27,7 @@ impl State<'_> {
         match keep {
             Keep::A => a,
             Keep::B => b,
-            Keep::Larger if self.fans[a as usize].len() >= self.fans[b as usize].len() => a,
+            Keep::Larger if self.topo.fans[a as usize].len() >= self.topo.fans[b as usize].len() => a,
             Keep::Larger => b,
         }
     }
@@ -47,13 +40,13 @@ impl State<'_> {
     /// otherwise: the paper's.
     #[inline]
     pub(super) fn ranked_cost(&self, cost: f64, area: f64) -> f64 {
-        if self.per_area && area > 0.0 { cost / area } else { cost }
+        if self.terms.per_area && area > 0.0 { cost / area } else { cost }
     }
 
     /// QFVP's normal term `(1 − cos θ)^w` of an edge with these endpoints (1 for QEM and w = 0).
     #[inline]
     pub(super) fn normal_factor(&self, va: &VertexData, vb: &VertexData) -> f64 {
-        let w = self.options.metric.w().unwrap_or(0.0);
+        let w = self.config.options.metric.w().unwrap_or(0.0);
         if w == 0.0 {
             return 1.0;
         }
@@ -74,7 +67,7 @@ impl State<'_> {
         let (shared, count) = self.edge_corners(u, v);
         let shared = &shared[..count.min(2)];
         let mut curvature: f64 = 0.0;
-        for c in &self.fans[u as usize] {
+        for c in &self.topo.fans[u as usize] {
             let nf = self.face_normal(c.face);
             let min = shared.iter().map(|s| (1.0 - nf.dot(self.face_normal(s.face))) / 2.0).fold(1.0f64, f64::min);
             curvature = curvature.max(min);

@@ -4,8 +4,8 @@
 
 use glam::DVec3;
 
-use super::classify::VertexKind;
 use super::kernel::State;
+use super::vertex::VertexKind;
 
 /// The share of the input's faces a run removes before the fan-distance term is measured: the
 /// collapses before rank by their quadric error per unit of area alone. On a dense mesh those
@@ -42,7 +42,7 @@ impl State<'_> {
             let pv = self.point(v);
             let (moved, departure) = (p - pv, pv - p);
             let mut nearest = f64::INFINITY;
-            for corner in &self.fans[v as usize] {
+            for corner in &self.topo.fans[v as usize] {
                 if corner.touches(other) {
                     continue;
                 }
@@ -80,7 +80,7 @@ impl State<'_> {
     /// The neighbour of border vertex `v` across its border edge other than the one to `other`:
     /// the one neighbour whose edge to `v` has a single face.
     fn across_border(&self, v: u32, other: u32) -> Option<u32> {
-        let fan = &self.fans[v as usize];
+        let fan = &self.topo.fans[v as usize];
         fan.iter().flat_map(|c| [c.next, c.prev]).find(|&u| u != other && self.edge_corners(v, u).1 == 1)
     }
 }

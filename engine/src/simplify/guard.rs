@@ -6,10 +6,9 @@ use smallvec::SmallVec;
 
 use crate::fan::FanSlot;
 use crate::mesh::Mesh;
-use crate::queue::order_key;
 
-use super::kernel::{NONE, State, to_f64};
-use super::placement::Choice;
+use super::topology::Topology;
+use super::vertex::{NONE, VertexData, to_f64};
 
 /// Marks a queue entry's `b` when its key includes the distance guard's term.
 pub(super) const GUARDED: u32 = 1 << 31;
@@ -121,57 +120,19 @@ impl DistanceGuard {
         }
         best
     }
-}
-
-/// Squared distance from `q` to the nearest of the triangles (`p`, x, y) over `far_edges`
-/// (infinite when there are none).
-pub(super) fn fan_distance2(q: DVec3, p: DVec3, far_edges: &[(DVec3, DVec3)]) -> f64 {
-    far_edges
-        .iter()
-        .map(|&(x, y)| (crate::bvh::closest_point_on_triangle(q, p, x, y) - q).length_squared())
-        .fold(f64::INFINITY, f64::min)
-}
-
-impl State<'_> {
-    /// Whether queue keys leave out a distance term that candidates pay when they reach the top
-    /// (the distance guard's or the fan-distance term).
-    pub(super) fn has_distance_term(&self) -> bool {
-        self.guard.is_some() || self.fan_term > 0.0
-    }
-
-    /// The queue key of edge {a, b} with its distance term added (the distance guard's when it is
-    /// on, else the fan-distance term): never below the key [`State::entry`] gives it, which
-    /// leaves the term out; with the choice it was computed for. The attribute quadrics' part of
-    /// the choice's cost stays in the key.
-    pub(super) fn guarded_key(&self, a: u32, b: u32) -> Option<(u32, Choice)> {
-        let choice = self.choose(a, b)?;
-        let (va, vb) = (&self.vertices[a as usize], &self.vertices[b as usize]);
-        let area = va.quadric.weight + vb.quadric.weight;
-        let factor = self.normal_factor(va, vb);
-        let length2 = (to_f64(va.position) - to_f64(vb.position)).length_squared();
-        let (weight, d2) = match &self.guard {
-            Some(guard) => (self.options.guard, self.guard_distance2(guard, a, b, choice.position)),
-            None => (self.fan_term, self.moved_fan_distance2(a, b, choice.position)),
-        };
-        // The cost before the normal factor: the quadric error, plus the attribute quadrics' error
-        // where they are on (their cost is `(error + attributes) · factor`).
-        let cost = match self.wedges {
-            Some(_) if factor > 0.0 => choice.cost / factor,
-            _ => choice.error,
-        };
-        Some((order_key((self.ranked_cost(cost, area) + weight * d2) * factor, choice.error, length2), choice))
-    }
 
     /// The squared distance the guard charges for collapsing {a, b} to `p`: the larger of the
     /// farthest witness of `a` or `b` from the new fan (input → result) and the farthest of `p` and
     /// the new faces' centroids from the input surface (result → input).
-    pub(super) fn guard_distance2(&self, guard: &DistanceGuard, a: u32, b: u32, p: DVec3) -> f64 {
+    pub(crate) fn distance2(&self, topo: &Topology, vertices: &[VertexData], a: u32, b: u32, p: DVec3) -> f64 {
+        let guard = self;
+        let point = |v: u32| to_f64(vertices[v as usize].position);
         let mut far_edges: SmallVec<[(DVec3, DVec3); 16]> = SmallVec::new();
         let mut far_hints: SmallVec<[[u32; 2]; 16]> = SmallVec::new();
         for (v, other) in [(a, b), (b, a)] {
-            for corner in &self.fans[v as usize] {
+            for corner in &topo.fans[v as usize] {
                 if !corner.touches(other) {
-                    far_edges.push((self.point(corner.next), self.point(corner.prev)));
+                    far_edges.push((point(corner.next), point(corner.prev)));
                     far_hints.push([corner.next, corner.prev].map(|x| guard.hint[x as usize]));
                 }
             }
@@ -210,11 +171,12 @@ impl State<'_> {
 
     /// After `a` took over a collapse: its witnesses become the [`WITNESSES`] of both endpoints'
     /// that are farthest from its new fan, and its hint the input face nearest to it.
-    pub(super) fn update_guard(&mut self, a: u32, b: u32) {
-        let Some(mut guard) = self.guard.take() else { return };
-        let p = self.point(a);
+    pub(crate) fn follow(&mut self, topo: &Topology, vertices: &[VertexData], a: u32, b: u32) {
+        let guard = self;
+        let point = |v: u32| to_f64(vertices[v as usize].position);
+        let p = point(a);
         let far_edges: SmallVec<[(DVec3, DVec3); 16]> =
-            self.fans[a as usize].iter().map(|c| (self.point(c.next), self.point(c.prev))).collect();
+            topo.fans[a as usize].iter().map(|c| (point(c.next), point(c.prev))).collect();
         let mut ranked: SmallVec<[(f64, u32); 2 * WITNESSES]> = guard.witnesses[a as usize]
             .iter()
             .chain(&guard.witnesses[b as usize])
@@ -232,8 +194,16 @@ impl State<'_> {
         let (ha, hb) = (guard.hint[a as usize], guard.hint[b as usize]);
         guard.hint[a as usize] = guard.nearest_face(p, &[ha, hb], 0.0).1;
         guard.hint[b as usize] = NONE;
-        self.guard = Some(guard);
     }
+}
+
+/// Squared distance from `q` to the nearest of the triangles (`p`, x, y) over `far_edges`
+/// (infinite when there are none).
+pub(super) fn fan_distance2(q: DVec3, p: DVec3, far_edges: &[(DVec3, DVec3)]) -> f64 {
+    far_edges
+        .iter()
+        .map(|&(x, y)| (crate::bvh::closest_point_on_triangle(q, p, x, y) - q).length_squared())
+        .fold(f64::INFINITY, f64::min)
 }
 
 #[cfg(test)]
@@ -261,7 +231,7 @@ mod tests {
         ] {
             let (mut state, edges) = State::new(&mesh, &options);
             state.carry_attributes(&mesh);
-            assert!(state.has_distance_term() && state.wedges.is_some(), "{name}");
+            assert!(state.has_distance_term() && state.terms.wedges.is_some(), "{name}");
             let mut ranked = 0;
             for [a, b] in edges {
                 let (Some(queued), Some((key, _))) = (state.entry(a, b), state.guarded_key(a, b)) else { continue };

@@ -28,10 +28,11 @@
 
 use glam::DVec3;
 
-use super::classify::VertexKind;
-use super::kernel::{NONE, State};
+use super::kernel::State;
 use super::options::{Metric, Outcome, SimplifyOptions};
 use super::run::{self, Run};
+use super::vertex::NONE;
+use super::vertex::VertexKind;
 use crate::error::MeshError;
 use crate::mesh::{DistanceUnits, Mesh};
 use crate::pm::{CollapseRecord, NO_VERTEX, ProgressiveMesh};
@@ -201,7 +202,7 @@ pub(super) fn simplify(
         let mut place = vec![(u8::MAX, NONE); n]; // (half, its number there) of each vertex
         for (s, (half, state)) in halves.iter().enumerate() {
             for (i, &v) in half.vertices.iter().enumerate() {
-                if state.vertex_alive[i] && !state.fans[i].is_empty() && place[v as usize].0 == u8::MAX {
+                if state.topo.vertex_alive[i] && !state.topo.fans[i].is_empty() && place[v as usize].0 == u8::MAX {
                     place[v as usize] = (s as u8, i as u32);
                 }
             }
@@ -222,8 +223,8 @@ pub(super) fn simplify(
         for (half, state) in halves {
             faces.extend(
                 (0..half.faces.len())
-                    .filter(|&f| state.face_alive[f])
-                    .map(|f| (half.faces[f], state.triangles[f].map(|v| half.vertices[v as usize]))),
+                    .filter(|&f| state.topo.face_alive[f])
+                    .map(|f| (half.faces[f], state.topo.triangles[f].map(|v| half.vertices[v as usize]))),
             );
         }
         faces.sort_unstable_by_key(|f| f.0);
@@ -235,7 +236,7 @@ pub(super) fn simplify(
         let whole_face: Vec<u32> = faces.iter().map(|f| f.0).collect();
         drop(faces);
         // The second stage: off the cut, a vertex keeps its class, quadric and normal from its half.
-        let carry = |i: usize, vertex: &mut super::kernel::VertexData| {
+        let carry = |i: usize, vertex: &mut super::vertex::VertexData| {
             let v = whole_vertex[i];
             if !on_cut[v as usize] {
                 let from = block(v);
@@ -253,7 +254,7 @@ pub(super) fn simplify(
     if !state.stacked_faces(&rest).is_empty() {
         return Ok(None);
     }
-    state.term_base = prepared.face_count();
+    state.terms.term_base = prepared.face_count();
     let heap = run::initial_queue(&state, edges, rest.face_count());
     let run2 = run::run(&mut state, heap, None, units, rest.face_count(), target)?;
     state.rebuild_triangles(&rest, &run2.log);
@@ -284,13 +285,14 @@ pub(super) fn simplify(
             let r = renumber(r, &whole_vertex, &whole_face);
             CollapseRecord { error: r.error.max(first_error as f32), ..r }
         }));
-        let triangles: Vec<[u32; 3]> = state.triangles.iter().map(|t| t.map(|v| whole_vertex[v as usize])).collect();
+        let triangles: Vec<[u32; 3]> =
+            state.topo.triangles.iter().map(|t| t.map(|v| whole_vertex[v as usize])).collect();
         ProgressiveMesh::from_log(
             prepared,
             input_vertex,
             |v| state.vertices[rest_vertex[v as usize] as usize].position,
             &triangles,
-            &state.face_alive,
+            &state.topo.face_alive,
             log,
             None,
         )
@@ -308,7 +310,7 @@ pub(super) fn simplify(
         dropped_duplicate_faces: 0,
         back_faces: 0,
         halves: true,
-        distance_term: state.fan_term,
+        distance_term: state.terms.fan_term,
     }))
 }
 

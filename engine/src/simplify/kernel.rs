@@ -1,21 +1,31 @@
-//! The working state of a run and the collapse itself: fans, per-vertex data, alive flags and
-//! version stamps, built from a prepared mesh ([`State::new`]) and changed only by
-//! [`State::collapse`]. Other modules of the crate (the refiner's triangle collapse) use the
-//! narrow API below, never the fields.
+//! The working state of a run and the collapse itself. The state is made of parts, each with one
+//! owner: the vertices' blocks ([`VertexData`]), the connectivity ([`Topology`]), the carried
+//! values ([`SeamCarrier`]), the checks' scratch ([`Scratch`]), the cost's other terms
+//! ([`Terms`]) and what was resolved from the options ([`Config`]). It is built from a prepared
+//! mesh ([`State::new`]) and changed only by [`State::collapse`]. The stages above this room
+//! (cost, placement, legality, queue, run) read it; the rooms below it own its parts. Other
+//! modules of the crate (the refiner's triangle collapse) use the narrow API below, never the
+//! fields.
 
 use glam::DVec3;
 
-use crate::fan::{Corner, FanSlot};
+use crate::fan::Corner;
 use crate::mesh::{CornerAttributes, Mesh};
 use crate::pm::CollapseRecord;
 use crate::prefetch::prefetch;
 use crate::quadric::Quadric;
 
 use super::attribute_quadric::WedgeQuadrics;
-use super::classify::{Scan, VertexKind, scan_fans};
+use super::candidate::Legal;
+use super::classify::{Scan, scan_fans};
 use super::guard::DistanceGuard;
-use super::legality::{CONE_MIN_QUALITY, Legal, NormalCone, triangle_quality};
-use super::options::{BoundaryMode, Metric, NormalUpdate, SimplifyOptions};
+use super::options::{BoundaryMode, Config, Metric, NormalUpdate, SimplifyOptions};
+use super::scratch::Scratch;
+use super::seams::SeamCarrier;
+use super::sheets::{self, Back};
+use super::terms::Terms;
+use super::topology::{self, AHEAD, Topology};
+use super::vertex::{CONE_MIN_QUALITY, NONE, NormalCone, VertexData, VertexKind, to_f64, triangle_quality};
 
 /// Weight of the boundary-constraint planes relative to the face planes.
 const BOUNDARY_WEIGHT: f64 = 10.0;
@@ -30,32 +40,21 @@ const SEAM_WEIGHT: f64 = 0.3;
 /// with 1 and 3; from 30 Fox stops above its face count.
 const SPOKE_WEIGHT: f64 = 1.0;
 
-pub(crate) const NONE: u32 = u32::MAX;
-
-/// Mutable state of one run: the algorithm owns it; nothing is left attached to the input mesh.
+/// Mutable state of one run, in parts with one owner each: the algorithm owns it; nothing is left
+/// attached to the input mesh.
 pub(crate) struct State<'o> {
-    pub(super) options: &'o SimplifyOptions,
+    /// The options, and what the run resolved from them once.
+    pub(super) config: Config<'o>,
     /// Quadric, normal, position and class of each vertex (see [`VertexData`]).
     pub(super) vertices: Vec<VertexData>,
-    /// Each face's corners, kept current by every collapse while `track_triangles` is set; the
-    /// simplifier's own loop does without (the fans carry what the loop reads: the state is made
-    /// without the array) and builds it once at the end from the log
-    /// ([`State::rebuild_triangles`]).
-    pub(super) triangles: Vec<[u32; 3]>,
-    pub(super) track_triangles: bool,
-    pub(super) face_alive: Vec<bool>,
-    /// The live faces around each vertex, with their other two corners.
-    pub(super) fans: Vec<FanSlot>,
-    pub(super) vertex_alive: Vec<bool>,
-    pub(super) version: Vec<u32>,
-    /// Scratch marks for the link condition.
-    pub(super) mark: Vec<u32>,
-    pub(super) mark_stamp: u32,
-    /// Scratch for the fold check: the two other corners and the new unit normal of each face.
-    pub(super) fan_scratch: Vec<([u32; 2], DVec3)>,
-    /// Scratch for the fold check: for a ring vertex x, the index in `fan_scratch` of the face
-    /// whose far edge starts at x (valid only where that face's far edge does start at x).
-    pub(super) spoke: Vec<u32>,
+    /// Fans, faces, alive flags, version stamps.
+    pub(super) topo: Topology,
+    /// The per-corner values carried through the collapses ([`State::carry_attributes`]).
+    pub(super) seams: SeamCarrier,
+    /// What the legality checks reuse from one candidate to the next.
+    pub(super) scratch: Scratch,
+    /// The terms beside the quadric cost: distance guard, fan-distance term, attribute quadrics.
+    pub(super) terms: Terms,
     /// Vertices on a border or frozen at the start: a collapse that takes one face instead of two
     /// removes one of them, so they bound how far the run's log outgrows half the faces removed.
     pub(super) open_vertices: usize,
@@ -63,94 +62,7 @@ pub(crate) struct State<'o> {
     pub(super) frozen_at_start: Vec<u32>,
     /// Per face, the back set aside for it (`super::sheets`): a face with one counts twice
     /// towards the target, and the output writes it again. Empty when none was.
-    pub(super) backs: Vec<super::sheets::Back>,
-    /// Counts the calls of `is_legal`: a [`Legal`] token from the latest call (the one whose new
-    /// face normals `fan_scratch` holds) carries the current count.
-    pub(super) check_id: u32,
-    pub(super) cos_max_normal_change: f64,
-    /// What the distance guard measures with, when it is on.
-    pub(super) guard: Option<DistanceGuard>,
-    /// Weight of the fan-distance term (`fan_term`): the options' where it applies (a quadric
-    /// cost, the distance guard off, no texture coordinates), else 0.
-    pub(super) fan_term: f64,
-    /// Whether the queue ranks quadric costs per unit of the area behind them
-    /// ([`State::ranked_cost`]): with a distance term (the fan-distance term or the guard's), not
-    /// with the paper's cost alone.
-    pub(super) per_area: bool,
-    /// The face count whose share [`super::fan_term::FAN_TERM_FROM`] the run removes before the
-    /// fan-distance term is measured: the mesh's own, or the whole input's for the second stage of
-    /// a run in halves (`super::halves`).
-    pub(super) term_base: usize,
-    /// Per-corner attributes carried through the collapses ([`State::carry_attributes`]): the
-    /// input's values, and for each current corner (3 per face) the input corner whose values it
-    /// has. Empty when the input has none (the collapse then pays nothing for them).
-    pub(super) attributes: CornerAttributes,
-    /// Per input corner, a number shared exactly by the corners of its vertex with the same
-    /// values ([`CornerAttributes::value_ids`]): every comparison of values is between corners of
-    /// one vertex (a corner's values are always its vertex's own).
-    pub(super) value_id: Vec<u32>,
-    pub(super) corner_source: Vec<u32>,
-    /// Per vertex, with attributes: whether it has two sets of values (on a seam). Rule 7 lets
-    /// such a vertex go only into another on the seam, so with one end on a seam, the ranking
-    /// keeps that end in place ([`State::choose`]) rather than picking a collapse rule 7 refuses.
-    pub(super) on_seam: Vec<bool>,
-    /// The attribute quadrics of the wedges ([`WedgeQuadrics`]), when attributes are carried and
-    /// weighted.
-    pub(super) wedges: Option<WedgeQuadrics>,
-    /// With attributes and a progressive mesh to record: per collapse, the corners of the removed
-    /// vertex that took new values, as (face, the input corner whose values it had before), and
-    /// where each collapse's entries end. The vertex splits restore them.
-    pub(crate) journal: Vec<(u32, u32)>,
-    pub(crate) journal_ends: Vec<u32>,
-}
-
-/// What ranking an edge reads of each endpoint, in one 128-byte block (two adjacent cache lines)
-/// rather than a line or two in each of four arrays. The cost is evaluated about twelve times per
-/// collapse, mostly with a neighbour whose data is not in cache: one block halves the misses where
-/// the vertex order is far from the surface order (measured in docs/history/benchmarks-log.md).
-#[derive(Debug, Clone, Copy, Default)]
-#[repr(C, align(64))]
-pub(super) struct VertexData {
-    pub(super) quadric: Quadric,
-    /// Unit vertex normal: Gouraud at the start, then the linear estimate (or the recomputed mean).
-    pub(super) normal: DVec3,
-    pub(super) position: [f32; 3],
-    pub(super) kind: VertexKind,
-    /// A lower bound on the cosine between `normal` and the unit normal of every live face around
-    /// the vertex ([`NormalCone`]), in the block's last spare bytes.
-    pub(super) cone: NormalCone,
-}
-
-const _: () = assert!(std::mem::size_of::<VertexData>() == 128);
-
-impl VertexData {
-    /// Asks the cache for both lines of the block (the quadric starts the first; normal, position,
-    /// class and cone fill the second).
-    #[inline]
-    pub(crate) fn prefetch(&self) {
-        prefetch(&self.quadric);
-        prefetch(&self.position);
-    }
-}
-
-/// The passes over the faces below write to their corners' fans and blocks, in the input's vertex
-/// order, which can be far from its face order: each asks for the data of the face `AHEAD` places
-/// on while it works on this one.
-const AHEAD: usize = 8;
-
-/// The faces around each vertex, in face order.
-fn build_fans(mesh: &Mesh) -> Vec<FanSlot> {
-    let mut fans = vec![FanSlot::default(); mesh.vertex_count()];
-    for (f, &[x, y, z]) in mesh.triangles.iter().enumerate() {
-        if let Some(t) = mesh.triangles.get(f + AHEAD) {
-            t.iter().for_each(|&v| fans[v as usize].prefetch());
-        }
-        let face = f as u32;
-        fans[x as usize].push(Corner { face, next: y, prev: z });
-        fans[y as usize].push(Corner { face, next: z, prev: x });
-        fans[z as usize].push(Corner { face, next: x, prev: y });
-    }
-    fans
+    pub(super) backs: Vec<Back>,
 }
 
 /// Each vertex's block with its position, its area-weighted quadric of the planes of its faces and
@@ -204,16 +116,6 @@ fn add_edge_plane(vertices: &mut [VertexData], mesh: &Mesh, f: usize, a: u32, b:
     vertices[b as usize].quadric += q;
 }
 
-#[inline]
-pub(super) fn to_f64(p: [f32; 3]) -> DVec3 {
-    DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
-}
-
-#[inline]
-pub(super) fn to_f32(p: DVec3) -> [f32; 3] {
-    [p.x as f32, p.y as f32, p.z as f32]
-}
-
 impl<'o> State<'o> {
     /// Working state for `mesh` (prepared: no repeated-index faces, no unreferenced vertices):
     /// fans, vertex classes, area-weighted quadrics with boundary constraint planes, Gouraud
@@ -244,7 +146,7 @@ impl<'o> State<'o> {
         let ((fans, Scan { kind, edges, boundary_edges }), (mut vertices, face_units)) = crate::parallel::join(
             mesh.face_count(),
             || {
-                let fans = build_fans(mesh);
+                let fans = topology::build_fans(mesh);
                 let scan = scan_fans(&fans);
                 (fans, scan)
             },
@@ -279,45 +181,32 @@ impl<'o> State<'o> {
             }
         }
         let mut state = State {
-            options,
+            config: Config::new(options),
             vertices,
-            triangles: if track { mesh.triangles.clone() } else { Vec::new() },
-            track_triangles: track,
-            face_alive: vec![true; mesh.face_count()],
-            fans,
-            vertex_alive: vec![true; vertex_count],
-            version: vec![0; vertex_count],
-            mark: vec![0; vertex_count],
-            mark_stamp: 0,
-            fan_scratch: Vec::new(),
-            spoke: vec![0; vertex_count],
+            topo: Topology::new(mesh, fans, track),
+            seams: SeamCarrier::default(),
+            scratch: Scratch::new(vertex_count),
+            terms: Terms {
+                guard: None,
+                // Off with texture coordinates: on the textured assets it raised the position
+                // error at 2-5x meshoptimizer's time (docs/attributes-report.md).
+                fan_term: match options.metric {
+                    Metric::Melax => 0.0,
+                    _ if options.guard > 0.0 || mesh.corners.uvs.is_some() => 0.0,
+                    _ => options.distance_term,
+                },
+                per_area: false,
+                term_base: mesh.face_count(),
+                wedges: None,
+            },
             open_vertices,
             frozen_at_start,
             backs: Vec::new(),
-            check_id: 0,
-            cos_max_normal_change: options.max_normal_change_degrees.to_radians().cos(),
-            guard: None,
-            // Off with texture coordinates: on the textured assets it raised the position error on
-            // capsule and Lantern at 2-5x meshoptimizer's time (docs/attributes-report.md).
-            fan_term: match options.metric {
-                Metric::Melax => 0.0,
-                _ if options.guard > 0.0 || mesh.corners.uvs.is_some() => 0.0,
-                _ => options.distance_term,
-            },
-            per_area: false,
-            term_base: mesh.face_count(),
-            attributes: CornerAttributes::default(),
-            value_id: Vec::new(),
-            corner_source: Vec::new(),
-            on_seam: Vec::new(),
-            wedges: None,
-            journal: Vec::new(),
-            journal_ends: Vec::new(),
         };
         if options.guard > 0.0 {
-            state.guard = DistanceGuard::new(mesh, &state.fans);
+            state.terms.guard = DistanceGuard::new(mesh, &state.topo.fans);
         }
-        state.per_area = state.has_distance_term() && options.metric != Metric::Melax;
+        state.terms.per_area = state.terms.has_distance_term() && options.metric != Metric::Melax;
         (state, edges)
     }
 
@@ -335,17 +224,17 @@ impl<'o> State<'o> {
         if mesh.corners.is_empty() {
             return;
         }
-        self.attributes = mesh.corners.clone();
-        self.value_id = mesh.corners.value_ids(&mesh.triangles, mesh.vertex_count());
-        self.corner_source = (0..3 * mesh.face_count() as u32).collect();
-        if !self.track_triangles {
-            self.triangles = mesh.triangles.clone();
-            self.track_triangles = true;
+        self.seams.attributes = mesh.corners.clone();
+        self.seams.value_id = mesh.corners.value_ids(&mesh.triangles, mesh.vertex_count());
+        self.seams.corner_source = (0..3 * mesh.face_count() as u32).collect();
+        if !self.topo.track_triangles {
+            self.topo.triangles = mesh.triangles.clone();
+            self.topo.track_triangles = true;
         }
         let mut seen = vec![[NONE; 2]; mesh.vertex_count()];
         for (k, &v) in mesh.triangles.iter().flatten().enumerate() {
             let sets = &mut seen[v as usize];
-            let known = |s: u32| s != NONE && self.value_id[s as usize] == self.value_id[k];
+            let known = |s: u32| s != NONE && self.seams.value_id[s as usize] == self.seams.value_id[k];
             if known(sets[0]) || known(sets[1]) {
                 continue;
             }
@@ -358,13 +247,14 @@ impl<'o> State<'o> {
             }
         }
         let diagonal2 = mesh.bounds().map_or(0.0, |b| b.diagonal().powi(2));
-        let w = self.options.attribute_weights;
-        self.wedges = WedgeQuadrics::new(mesh, &self.value_id, [w.uv, w.normal, w.color].map(|w| w * diagonal2));
+        let w = self.config.options.attribute_weights;
+        self.terms.wedges =
+            WedgeQuadrics::new(mesh, &self.seams.value_id, [w.uv, w.normal, w.color].map(|w| w * diagonal2));
         // (A survivor keeps its flag: a seam vertex goes only into one on the same seam.)
-        self.on_seam = seen.iter().map(|sets| sets[1] != NONE).collect();
+        self.seams.on_seam = seen.iter().map(|sets| sets[1] != NONE).collect();
         self.add_seam_planes(mesh);
-        if self.options.lock_seams {
-            for (vertex, &seam) in self.vertices.iter_mut().zip(&self.on_seam) {
+        if self.config.options.lock_seams {
+            for (vertex, &seam) in self.vertices.iter_mut().zip(&self.seams.on_seam) {
                 if seam && vertex.kind != VertexKind::Frozen {
                     vertex.kind = VertexKind::Anchored;
                 }
@@ -391,14 +281,14 @@ impl<'o> State<'o> {
                 let anchor = |v: u32| self.vertices[v as usize].kind == VertexKind::Anchored;
                 // The anchor's corner of a spoke (its index among f's corners), or None for an edge
                 // along a seam.
-                let spoke = match (self.on_seam[a as usize], self.on_seam[b as usize]) {
+                let spoke = match (self.seams.on_seam[a as usize], self.seams.on_seam[b as usize]) {
                     (true, true) => None,
                     (true, false) if anchor(a) => Some((a, k)),
                     (false, true) if anchor(b) => Some((b, (k + 1) % 3)),
                     _ => continue,
                 };
                 // The face across (a, b), and whether its corners at a and b carry other values.
-                let across = self.fans[a as usize].iter().find(|d| d.face != f as u32 && d.touches(b));
+                let across = self.topo.fans[a as usize].iter().find(|d| d.face != f as u32 && d.touches(b));
                 let Some(d) = across else { continue };
                 let g = d.face;
                 let same = self.same_values(3 * f as u32 + k as u32, self.source_at(g, a))
@@ -419,102 +309,9 @@ impl<'o> State<'o> {
         }
     }
 
-    /// Whether input corners `x` and `y`, of the same vertex, carry the same values.
-    #[inline]
-    pub(super) fn same_values(&self, x: u32, y: u32) -> bool {
-        self.value_id[x as usize] == self.value_id[y as usize]
-    }
-
-    /// The input corner whose values vertex `v` has in face `f`.
-    pub(super) fn source_at(&self, f: u32, v: u32) -> u32 {
-        let k = self.triangles[f as usize].iter().position(|&x| x == v).expect("v is a corner of f");
-        self.corner_source[3 * f as usize + k]
-    }
-
-    /// Rule 7 for collapsing `b` into `a` over the faces `dead` (one or two) of their edge: the
-    /// values each of b's corners takes, as `(b's values, a's values)` pairs for the first and the
-    /// second side; `None` when the collapse would carry values across a seam. With one set of
-    /// values at b, both sides map it to a's values in the edge's faces, which must agree. With two
-    /// (b on a seam) the edge must have two faces that differ at b, each side maps to a's values
-    /// in its face, and those must differ too (a on the same seam). More than two: refused.
-    pub(super) fn seam_sides(&self, a: u32, b: u32, dead: &[u32]) -> Option<[(u32, u32); 2]> {
-        let same = |x: u32, y: u32| self.same_values(x, y);
-        let b_first = self.source_at(dead[0], b);
-        let a_first = self.source_at(dead[0], a);
-        let mut b_other = NONE;
-        // (A vertex off the seams has one set of values: nothing to look for.)
-        let fan: &[Corner] = if self.on_seam[b as usize] { &self.fans[b as usize] } else { &[] };
-        for corner in fan {
-            let s = self.source_at(corner.face, b);
-            if same(s, b_first) {
-                continue;
-            }
-            if b_other == NONE {
-                b_other = s;
-            } else if !same(s, b_other) {
-                return None;
-            }
-        }
-        if b_other == NONE {
-            // One set at b: a's values must be one across the edge's faces.
-            if let Some(&second) = dead.get(1)
-                && !same(self.source_at(second, a), a_first)
-            {
-                return None;
-            }
-            return Some([(b_first, a_first), (b_first, a_first)]);
-        }
-        let &[_, second] = dead else { return None };
-        let (b_second, a_second) = (self.source_at(second, b), self.source_at(second, a));
-        if same(b_second, b_first) || same(a_second, a_first) {
-            return None;
-        }
-        Some([(b_first, a_first), (b_second, a_second)])
-    }
-
-    /// Rule 7 in texture space: every face that b keeps (not in `dead`), with b's texture
-    /// coordinates replaced as `sides` says, keeps the orientation and a non-zero area of its
-    /// texture-space triangle (a flipped one would show the texture mirrored). True without
-    /// texture coordinates.
-    pub(super) fn texture_keeps_orientation(&self, b: u32, dead: &[u32; 2], sides: [(u32, u32); 2]) -> bool {
-        let Some(uv) = &self.attributes.uvs else { return true };
-        let [(b_first, a_first), (_, a_second)] = sides;
-        let area = |s: [u32; 3]| {
-            let [p, q, r] = s.map(|k| uv[k as usize].map(f64::from));
-            (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
-        };
-        self.fans[b as usize].iter().filter(|c| c.face != dead[0] && c.face != dead[1]).all(|c| {
-            let f = c.face as usize;
-            let k = self.triangles[f].iter().position(|&x| x == b).expect("b is a corner of its faces");
-            let mut sources = [0, 1, 2].map(|i| self.corner_source[3 * f + i]);
-            let before = area(sources);
-            let first = self.same_values(sources[k], b_first);
-            sources[k] = if first { a_first } else { a_second };
-            let after = area(sources);
-            // A face without texture-space area has no orientation to keep.
-            before == 0.0 || after * before > 0.0
-        })
-    }
-
-    /// Brings `triangles` up to date after a run without tracking: every corner names the vertex
-    /// its input vertex was merged into, last merge first (the same as renaming at each collapse).
-    /// Built from the input's triangles (`mesh`, the one the state was made from): the state
-    /// holds no copy while it does not track them.
-    pub(crate) fn rebuild_triangles(&mut self, mesh: &Mesh, log: &[CollapseRecord]) {
-        if self.track_triangles {
-            return;
-        }
-        let mut last: Vec<u32> = (0..self.vertices.len() as u32).collect();
-        for record in log.iter().rev() {
-            last[record.removed as usize] = last[record.survivor as usize];
-        }
-        self.triangles = mesh.triangles.iter().map(|t| t.map(|v| last[v as usize])).collect();
-        self.track_triangles = true;
-    }
-
     /// The live vertices that never move: frozen (non-manifold) ones and anchors.
     pub(crate) fn frozen_vertices(&self) -> usize {
-        (self.vertices.iter().zip(&self.vertex_alive))
+        (self.vertices.iter().zip(&self.topo.vertex_alive))
             .filter(|&(v, &alive)| alive && matches!(v.kind, VertexKind::Frozen | VertexKind::Anchored))
             .count()
     }
@@ -524,17 +321,19 @@ impl<'o> State<'o> {
         let mut new_index = vec![NONE; self.vertices.len()];
         let mut positions = Vec::new();
         for (v, slot) in new_index.iter_mut().enumerate() {
-            if self.vertex_alive[v] && !self.fans[v].is_empty() {
+            if self.topo.vertex_alive[v] && !self.topo.fans[v].is_empty() {
                 *slot = positions.len() as u32;
                 positions.push(self.vertices[v].position);
             }
         }
-        let live = || (0..self.triangles.len()).filter(|&f| self.face_alive[f]);
-        let triangles: Vec<[u32; 3]> = live().map(|f| self.triangles[f].map(|v| new_index[v as usize])).collect();
-        let corners = if self.corner_source.is_empty() {
+        let live = || (0..self.topo.triangles.len()).filter(|&f| self.topo.face_alive[f]);
+        let triangles: Vec<[u32; 3]> = live().map(|f| self.topo.triangles[f].map(|v| new_index[v as usize])).collect();
+        let corners = if self.seams.corner_source.is_empty() {
             CornerAttributes::default()
         } else {
-            self.attributes.pick(live().flat_map(|f| (0..3).map(move |k| self.corner_source[3 * f + k] as usize)))
+            self.seams
+                .attributes
+                .pick(live().flat_map(|f| (0..3).map(move |k| self.seams.corner_source[3 * f + k] as usize)))
         };
         let mesh = Mesh { positions, triangles, corners };
         debug_assert!(mesh.check().is_ok());
@@ -546,8 +345,8 @@ impl<'o> State<'o> {
     }
 
     pub(crate) fn face_normal(&self, f: u32) -> DVec3 {
-        debug_assert!(self.track_triangles, "the triangle array is not being kept current");
-        let [a, b, c] = self.triangles[f as usize];
+        debug_assert!(self.topo.track_triangles, "the triangle array is not being kept current");
+        let [a, b, c] = self.topo.triangles[f as usize];
         let (pa, pb, pc) = (self.point(a), self.point(b), self.point(c));
         (pb - pa).cross(pc - pa).normalize_or_zero()
     }
@@ -555,16 +354,11 @@ impl<'o> State<'o> {
     /// Mean of the unit normals of the faces around `v` (Gouraud).
     pub(crate) fn fan_normal(&self, v: u32) -> DVec3 {
         let p = self.point(v);
-        let sum: DVec3 = self.fans[v as usize]
+        let sum: DVec3 = self.topo.fans[v as usize]
             .iter()
             .map(|c| (self.point(c.next) - p).cross(self.point(c.prev) - p).normalize_or_zero())
             .sum();
         sum.normalize_or_zero()
-    }
-
-    /// Faces on edge (a, b), as corners of `a`'s fan, and how many there are.
-    pub(super) fn edge_corners(&self, a: u32, b: u32) -> ([Corner; 2], usize) {
-        self.fans[a as usize].touching(b)
     }
 
     /// Asks the cache, all at once, for what the checks, the collapse of (a, b) and the re-ranking
@@ -576,11 +370,11 @@ impl<'o> State<'o> {
         // Not a nor b (each is a `next` around the other: their data is in cache already). A
         // hint that has to wait for a free fill buffer stalls the core, so none is wasted.
         for (v, other) in [(a, b), (b, a)] {
-            for corner in &self.fans[v as usize] {
+            for corner in &self.topo.fans[v as usize] {
                 let x = corner.next;
                 if x != other {
                     self.vertices[x as usize].prefetch();
-                    self.fans[x as usize].prefetch();
+                    self.topo.fans[x as usize].prefetch();
                 }
             }
         }
@@ -592,15 +386,15 @@ impl<'o> State<'o> {
     #[inline]
     pub(super) fn prefetch_edge(&self, a: u32, b: u32) {
         for v in [a as usize, b as usize] {
-            prefetch(&self.version[v]);
+            prefetch(&self.topo.version[v]);
             self.vertices[v].prefetch();
-            self.fans[v].prefetch();
+            self.topo.fans[v].prefetch();
         }
     }
 
     /// Applies a legal collapse and returns its log record.
     pub(crate) fn collapse(&mut self, legal: Legal) -> CollapseRecord {
-        let scratch_is_current = legal.check == self.check_id;
+        let scratch_is_current = legal.check == self.scratch.check_id;
         let c = &legal.candidate;
         let (a, b) = (c.survivor, c.removed);
         let (shared, shared_count) = self.edge_corners(a, b);
@@ -628,65 +422,67 @@ impl<'o> State<'o> {
                 record.right = third;
                 record.right_face = f;
             }
-            self.face_alive[f as usize] = false;
+            self.topo.face_alive[f as usize] = false;
             *slot = f;
-            let fan = &mut self.fans[third as usize];
+            let fan = &mut self.topo.fans[third as usize];
             if let Some(i) = fan.find_face(f) {
                 fan.remove(i);
             }
         }
         // Rule 7's mapping of b's values to a's (checked legal: `is_legal` refused it otherwise).
-        let sides = if self.corner_source.is_empty() {
+        let sides = if self.seams.corner_source.is_empty() {
             None
         } else {
             let count = if dead[1] == NONE { 1 } else { 2 };
             let sides = self.seam_sides(a, b, &dead[..count]).expect("rule 7 was checked");
-            self.merge_wedges(sides);
+            if let Some(q) = &mut self.terms.wedges {
+                q.merge(sides);
+            }
             Some(sides)
         };
         let is_dead = |d: &Corner| (d.face == dead[0]) | (d.face == dead[1]);
-        self.fans[a as usize].retain(|d| !is_dead(d));
-        let moved = std::mem::take(&mut self.fans[b as usize]);
-        let count_a = self.fans[a as usize].len() as f64;
+        self.topo.fans[a as usize].retain(|d| !is_dead(d));
+        let moved = std::mem::take(&mut self.topo.fans[b as usize]);
+        let count_a = self.topo.fans[a as usize].len() as f64;
         // b's fan holds each face at b once, the shared faces among them.
         let count_b = moved.len() - shared_count;
         debug_assert_eq!(count_b, moved.iter().filter(|d| !is_dead(d)).count());
         for corner in moved.iter().filter(|d| !is_dead(d)) {
             let f = corner.face;
-            if self.track_triangles {
-                for (k, slot) in self.triangles[f as usize].iter_mut().enumerate() {
+            if self.topo.track_triangles {
+                for (k, slot) in self.topo.triangles[f as usize].iter_mut().enumerate() {
                     if *slot == b {
                         *slot = a;
                         if let Some([(b_first, a_first), (_, a_second)]) = sides {
                             let at = 3 * f as usize + k;
-                            let first =
-                                self.value_id[self.corner_source[at] as usize] == self.value_id[b_first as usize];
-                            if self.options.record_progressive {
-                                self.journal.push((f, self.corner_source[at]));
+                            let first = self.seams.value_id[self.seams.corner_source[at] as usize]
+                                == self.seams.value_id[b_first as usize];
+                            if self.config.options.record_progressive {
+                                self.seams.journal.push((f, self.seams.corner_source[at]));
                             }
-                            self.corner_source[at] = if first { a_first } else { a_second };
+                            self.seams.corner_source[at] = if first { a_first } else { a_second };
                         }
                     }
                 }
             }
             // The face's corners at its two other vertices name b: they now name a.
             for x in [corner.next, corner.prev] {
-                let fan = &mut self.fans[x as usize];
+                let fan = &mut self.topo.fans[x as usize];
                 if let Some(d) = fan.find_face(f).map(|i| &mut fan[i]) {
                     // One of the two names b: which one is as good as random, so no branch.
                     d.next = if d.next == b { a } else { d.next };
                     d.prev = if d.prev == b { a } else { d.prev };
                 }
             }
-            self.fans[a as usize].push(*corner);
+            self.topo.fans[a as usize].push(*corner);
         }
-        self.vertex_alive[b as usize] = false;
+        self.topo.vertex_alive[b as usize] = false;
         if legal.hole != NONE {
             // The hole closed: the merged vertex's fan and the hole's third corner's are closed now
             // (the caller ranks the corner's edges again: their class changed).
             self.vertices[a as usize].kind = VertexKind::Interior;
             self.vertices[legal.hole as usize].kind = VertexKind::Interior;
-            self.version[legal.hole as usize] = self.version[legal.hole as usize].wrapping_add(1);
+            self.topo.version[legal.hole as usize] = self.topo.version[legal.hole as usize].wrapping_add(1);
         }
         let removed = self.vertices[b as usize];
         let survivor = &mut self.vertices[a as usize];
@@ -694,71 +490,20 @@ impl<'o> State<'o> {
         survivor.quadric += removed.quadric;
         // The linear estimate, unless it cancels out (opposite normals): then Gouraud on the new fan.
         let linear = (survivor.normal * count_a + removed.normal * count_b as f64).normalize_or_zero();
-        self.vertices[a as usize].normal = match self.options.normals {
+        self.vertices[a as usize].normal = match self.config.options.normals {
             NormalUpdate::Linear if linear != DVec3::ZERO => linear,
             NormalUpdate::Linear | NormalUpdate::Recompute => self.fan_normal(a),
         };
         self.update_cones(a, scratch_is_current);
-        self.update_guard(a, b);
-        self.version[a as usize] = self.version[a as usize].wrapping_add(1);
-        self.version[b as usize] = self.version[b as usize].wrapping_add(1);
-        if sides.is_some() && self.options.record_progressive {
-            self.journal_ends.push(self.journal.len() as u32);
+        if let Some(guard) = &mut self.terms.guard {
+            guard.follow(&self.topo, &self.vertices, a, b);
+        }
+        self.topo.version[a as usize] = self.topo.version[a as usize].wrapping_add(1);
+        self.topo.version[b as usize] = self.topo.version[b as usize].wrapping_add(1);
+        if sides.is_some() && self.config.options.record_progressive {
+            self.seams.journal_ends.push(self.seams.journal.len() as u32);
         }
         record
-    }
-
-    /// A fresh stamp for the scratch marks (every mark is older).
-    pub(super) fn next_stamp(&mut self) -> u32 {
-        self.mark_stamp = self.mark_stamp.wrapping_add(2);
-        if self.mark_stamp < 2 {
-            self.mark.iter_mut().for_each(|m| *m = 0);
-            self.mark_stamp = 2;
-        }
-        self.mark_stamp
-    }
-
-    /// The one-ring of `v`, sorted, into `out`.
-    pub(crate) fn neighbours(&self, v: u32, out: &mut Vec<u32>) {
-        // Around a closed manifold fan every neighbour is the `next` corner of exactly one face, so
-        // those alone are the ring; an open fan adds its last `prev`. Sorting the `next` corners
-        // and adding only the missing `prev` ones sorts half as much as sorting both.
-        let fan = &self.fans[v as usize];
-        out.clear();
-        out.extend(fan.iter().map(|c| c.next));
-        out.sort_unstable();
-        out.dedup();
-        let nexts = out.len();
-        for c in fan {
-            let missing = if nexts <= 16 {
-                !out[..nexts].contains(&c.prev)
-            } else {
-                out[..nexts].binary_search(&c.prev).is_err()
-            };
-            if missing {
-                out.push(c.prev);
-            }
-        }
-        if out.len() > nexts {
-            out.sort_unstable();
-            out.dedup();
-        }
-    }
-
-    /// Corners of face `f` (kept current only for a state made with [`State::new`]).
-    pub(crate) fn triangle(&self, f: u32) -> [u32; 3] {
-        debug_assert!(self.track_triangles, "the triangle array is not being kept current");
-        self.triangles[f as usize]
-    }
-
-    /// Whether face `f` is still in the mesh.
-    pub(crate) fn is_face_alive(&self, f: u32) -> bool {
-        self.face_alive[f as usize]
-    }
-
-    /// Whether vertex `v` is still in the mesh.
-    pub(crate) fn is_vertex_alive(&self, v: u32) -> bool {
-        self.vertex_alive[v as usize]
     }
 
     /// The class of vertex `v`, fixed at the start.
@@ -766,8 +511,133 @@ impl<'o> State<'o> {
         self.vertices[v as usize].kind
     }
 
+    /// Faces on edge (a, b), as corners of `a`'s fan, and how many there are.
+    #[inline]
+    pub(super) fn edge_corners(&self, a: u32, b: u32) -> ([Corner; 2], usize) {
+        self.topo.edge_corners(a, b)
+    }
+
+    /// The one-ring of `v`, sorted, into `out`.
+    pub(crate) fn neighbours(&self, v: u32, out: &mut Vec<u32>) {
+        self.topo.neighbours(v, out)
+    }
+
+    /// Corners of face `f` (kept current only for a state made with [`State::new`]).
+    pub(crate) fn triangle(&self, f: u32) -> [u32; 3] {
+        self.topo.triangle(f)
+    }
+
+    /// Whether face `f` is still in the mesh.
+    pub(crate) fn is_face_alive(&self, f: u32) -> bool {
+        self.topo.is_face_alive(f)
+    }
+
+    /// Whether vertex `v` is still in the mesh.
+    pub(crate) fn is_vertex_alive(&self, v: u32) -> bool {
+        self.topo.is_vertex_alive(v)
+    }
+
     /// The live faces around vertex `v`.
     pub(crate) fn faces_around(&self, v: u32) -> impl Iterator<Item = u32> + '_ {
-        self.fans[v as usize].iter().map(|c| c.face)
+        self.topo.faces_around(v)
+    }
+
+    /// Brings the faces' corners up to date after a run without tracking ([`Topology::rebuild_triangles`]).
+    pub(crate) fn rebuild_triangles(&mut self, mesh: &Mesh, log: &[CollapseRecord]) {
+        self.topo.rebuild_triangles(mesh, log)
+    }
+
+    /// Whether input corners `x` and `y`, of the same vertex, carry the same values.
+    #[inline]
+    pub(super) fn same_values(&self, x: u32, y: u32) -> bool {
+        self.seams.same_values(x, y)
+    }
+
+    /// The input corner whose values vertex `v` has in face `f`.
+    pub(super) fn source_at(&self, f: u32, v: u32) -> u32 {
+        self.seams.source_at(&self.topo, f, v)
+    }
+
+    /// Rule 7's mapping of b's values to a's for collapsing `b` into `a` over `dead`
+    /// ([`SeamCarrier::seam_sides`]).
+    pub(super) fn seam_sides(&self, a: u32, b: u32, dead: &[u32]) -> Option<[(u32, u32); 2]> {
+        self.seams.seam_sides(&self.topo, a, b, dead)
+    }
+
+    /// Rule 7 in texture space ([`SeamCarrier::texture_keeps_orientation`]).
+    pub(super) fn texture_keeps_orientation(&self, b: u32, dead: &[u32; 2], sides: [(u32, u32); 2]) -> bool {
+        self.seams.texture_keeps_orientation(&self.topo, b, dead, sides)
+    }
+
+    /// A fresh stamp for the scratch marks.
+    pub(super) fn next_stamp(&mut self) -> u32 {
+        self.scratch.next_stamp()
+    }
+
+    /// Whether queue keys leave out a distance term that candidates pay at the top of the queue.
+    pub(super) fn has_distance_term(&self) -> bool {
+        self.terms.has_distance_term()
+    }
+    /// Keeps the [`NormalCone`]s exact after `a` moved and took over faces: each face around `a`
+    /// widens the cones of its two other corners, and `a`'s own cone is rebuilt around its new
+    /// normal from these faces alone (they are all its faces). With `checked`, the new normals are
+    /// the ones [`State::is_legal`] just computed for this collapse (its scratch holds exactly the
+    /// faces of `a`'s new fan); otherwise they are computed here.
+    pub(super) fn update_cones(&mut self, a: u32, checked: bool) {
+        let axis = self.vertices[a as usize].normal;
+        let mut cone = NormalCone::EMPTY;
+        if checked {
+            debug_assert_eq!(self.scratch.fan_scratch.len(), self.topo.fans[a as usize].len());
+            for &([x, y], n) in &self.scratch.fan_scratch {
+                cone.widen(axis, n);
+                for v in [x, y] {
+                    let vertex = &mut self.vertices[v as usize];
+                    vertex.cone.widen(vertex.normal, n);
+                }
+            }
+            self.vertices[a as usize].cone = cone;
+            return;
+        }
+        let p = self.point(a);
+        for i in 0..self.topo.fans[a as usize].len() {
+            let Corner { next: x, prev: y, .. } = self.topo.fans[a as usize][i];
+            let (px, py) = (self.point(x), self.point(y));
+            let cross = (px - p).cross(py - p);
+            let area2 = cross.length();
+            // `is_legal` refuses collapses that make a face this poor; a caller that skipped it
+            // gets cones that never rule a fold out, not wrong ones.
+            if area2 == 0.0 || triangle_quality(area2, p, px, py) < CONE_MIN_QUALITY {
+                cone = NormalCone::NEVER;
+                self.vertices[x as usize].cone = NormalCone::NEVER;
+                self.vertices[y as usize].cone = NormalCone::NEVER;
+                continue;
+            }
+            let n = cross / area2;
+            cone.widen(axis, n);
+            for v in [x, y] {
+                let vertex = &mut self.vertices[v as usize];
+                vertex.cone.widen(vertex.normal, n);
+            }
+        }
+        self.vertices[a as usize].cone = cone;
+    }
+
+    /// The appearance part of collapsing `b` into `a` at `p` ([`WedgeQuadrics::attribute_error`]):
+    /// 0 without attribute quadrics.
+    #[inline]
+    pub(super) fn attribute_error(&self, a: u32, b: u32, p: DVec3) -> f64 {
+        self.terms.wedges.as_ref().map_or(0.0, |q| q.attribute_error(&self.topo, &self.seams, a, b, p))
+    }
+
+    /// The faces face `f` stands for in the output: itself and its back, if one was set aside.
+    #[inline]
+    pub(super) fn output_faces(&self, f: u32) -> usize {
+        sheets::output_faces(&self.backs, f)
+    }
+
+    /// The faces of `mesh` (the state's) stacked on an earlier face with its values
+    /// ([`sheets::stacked_faces`]).
+    pub(super) fn stacked_faces(&self, mesh: &Mesh) -> Vec<sheets::StackedFace> {
+        sheets::stacked_faces(&self.topo, &self.frozen_at_start, mesh)
     }
 }

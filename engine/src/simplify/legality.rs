@@ -4,35 +4,15 @@
 
 use glam::DVec3;
 
-use super::classify::VertexKind;
-use super::cost::Candidate;
-use super::kernel::{NONE, State, to_f64};
-use super::options::Refusal;
+use super::candidate::{Candidate, Legal};
+use super::kernel::State;
+use super::options::{BoundaryMode, Refusal};
+use super::vertex::VertexKind;
+use super::vertex::{FOLD_DOT, NONE, to_f64, triangle_quality};
 use crate::fan::Corner;
-
-/// A collapse that passed [`State::is_legal`]: the only way to ask for [`State::collapse`]. It
-/// names the check that passed it, so the collapse knows whether that check's new face normals
-/// (the state's scratch) are still the ones for this collapse.
-#[derive(Debug)]
-pub(crate) struct Legal {
-    pub(super) candidate: Candidate,
-    pub(super) check: u32,
-    pub(super) hole: u32,
-}
-
-impl Legal {
-    /// The collapse that was checked.
-    pub(crate) fn candidate(&self) -> &Candidate {
-        &self.candidate
-    }
-}
 
 /// Smallest `4√3·area / Σ edge²` (1 for an equilateral triangle) a collapse may create.
 pub const MIN_TRIANGLE_QUALITY: f64 = 1e-3;
-
-/// Two faces sharing an edge at the merged vertex may not end up with normals whose dot product is
-/// below this (a fold of more than ~154°).
-pub const FOLD_DOT: f64 = -0.9;
 
 /// Whether two faces of a new fan (far edge, unit normal) that share a vertex other than the
 /// merged one turn back onto each other: every pair looked at, the reference for the one-pass
@@ -47,88 +27,11 @@ fn folds_pairwise(fan: &[([u32; 2], DVec3)]) -> bool {
     })
 }
 
-/// Faces whose quality (`4√3·area / Σ edge²`) is below this at the start make their corners'
-/// [`NormalCone`]s unusable: the normal of such a face depends on which corner its cross product
-/// starts from by more than the cone test's margin. Every face a collapse creates is far above it
-/// ([`MIN_TRIANGLE_QUALITY`]).
-pub(super) const CONE_MIN_QUALITY: f64 = 1e-4;
-
-/// Margin (in cosine) that the cone test keeps from the fold threshold: far more than the rounding
-/// of the unit normals it compares, so a skipped check is one that could not have failed.
-const CONE_MARGIN: f64 = 1e-6;
-
-/// `sin` of the fold angle, `√(1 − FOLD_DOT²)`.
-const FOLD_SIN: f64 = 0.435_889_894_354_067_4;
-
-/// The cosine of the widest angle between a vertex's normal and the normals of the faces around it,
-/// rounded down to a multiple of 1/32767 (so it never claims a narrower cone than there is).
-///
-/// It lets the fold check skip the face across a moved face's far edge (x, y) when no face at x can
-/// be folded onto: if the moved face's new normal is within θ of x's normal and every face at x is
-/// within γ of it, the two normals are at most θ + γ apart, and below the fold angle the check
-/// passes. Reading the face across costs a search of x's fan and the position of a vertex of the
-/// 2-ring, the largest source of cache misses of the whole loop; the cone sits in the block of x,
-/// which the check has just read for x's position. Kept exact by widening the cones of every
-/// vertex of each face a collapse moves ([`State::collapse`]), and recomputed for the survivor,
-/// whose normal changes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) struct NormalCone(i16);
-
-impl NormalCone {
-    /// No face yet: every normal is within 0° (the first face widens it).
-    pub(super) const EMPTY: NormalCone = NormalCone(i16::MAX);
-    /// Never usable: below −FOLD_DOT's reach, so the test never passes.
-    pub(super) const NEVER: NormalCone = NormalCone(i16::MIN);
-
-    pub(super) fn at_least(cos: f64) -> NormalCone {
-        // One step below the truncated value, so never above `cos` (a float-to-int cast
-        // truncates toward zero and saturates; `floor` would be a library call). `max` maps NaN
-        // to the lowest value, which no test passes.
-        NormalCone((cos * 32767.0 - 1.0).max(NormalCone::NEVER.0 as f64) as i16)
-    }
-
-    pub(super) fn cos(self) -> f64 {
-        self.0 as f64 / 32767.0
-    }
-
-    /// Widens the cone around `axis` to take in the unit normal `n`.
-    pub(super) fn widen(&mut self, axis: DVec3, n: DVec3) {
-        *self = NormalCone(self.0.min(NormalCone::at_least(axis.dot(n)).0));
-    }
-
-    /// Whether no face of this cone (around the unit `axis`) can be folded onto a face with unit
-    /// normal `n`: the angle between `n` and the axis plus the cone's half-angle stays below the
-    /// fold angle, with a margin.
-    #[inline]
-    pub(super) fn excludes_fold(self, axis: DVec3, n: DVec3) -> bool {
-        let d = axis.dot(n);
-        let cos = self.cos();
-        // With √(1 − d²) ≤ 1 first (no square root): enough for the usual nearly flat fan.
-        d >= FOLD_DOT + CONE_MARGIN
-            && (cos >= FOLD_DOT * d + FOLD_SIN + CONE_MARGIN
-                || cos >= FOLD_DOT * d + FOLD_SIN * (1.0 - d * d).max(0.0).sqrt() + CONE_MARGIN)
-    }
-}
-
-impl Default for NormalCone {
-    fn default() -> Self {
-        NormalCone::EMPTY
-    }
-}
-
-/// `4√3·area / Σ edge²`: 1 for equilateral, 0 for degenerate; `area2` is twice the area (the
-/// length of the edge cross product, which the caller has at hand).
-#[inline]
-pub(super) fn triangle_quality(area2: f64, a: DVec3, b: DVec3, c: DVec3) -> f64 {
-    let sum = (b - a).length_squared() + (c - b).length_squared() + (a - c).length_squared();
-    if sum > 0.0 { 2.0 * 3f64.sqrt() * area2 / sum } else { 0.0 }
-}
-
 impl State<'_> {
     /// Rules 3–7 of the module doc for a candidate, 7 first: the [`Legal`] token that
     /// [`State::collapse`] takes, or the first rule that refuses it.
     pub(crate) fn is_legal(&mut self, c: &Candidate) -> Result<Legal, Refusal> {
-        self.check_id = self.check_id.wrapping_add(1);
+        self.scratch.check_id = self.scratch.check_id.wrapping_add(1);
         let (a, b) = (c.survivor, c.removed);
         self.prefetch_ring(a, b);
         // Rule 3: the edge has one or two faces.
@@ -139,7 +42,7 @@ impl State<'_> {
         // Rule 7, with per-corner attributes only: no values carried across a seam. Checked before
         // the rest of rule 3, which reads both fans in full: it is cheaper, and on textured meshes
         // it refuses most (over half of Lantern's refusals).
-        if !self.corner_source.is_empty() {
+        if !self.seams.corner_source.is_empty() {
             let dead = [shared[0].face, if shared_count == 2 { shared[1].face } else { NONE }];
             let sides = self.seam_sides(a, b, &dead[..shared_count]).ok_or(Refusal::Seam)?;
             if !self.texture_keeps_orientation(b, &dead, sides) {
@@ -151,18 +54,18 @@ impl State<'_> {
         // the collapse closes.
         let opposite = [shared[0].other(b), if shared_count == 2 { shared[1].other(b) } else { NONE }];
         let stamp = self.next_stamp();
-        for corner in &self.fans[a as usize] {
-            self.mark[corner.next as usize] = stamp;
-            self.mark[corner.prev as usize] = stamp;
+        for corner in &self.topo.fans[a as usize] {
+            self.scratch.mark[corner.next as usize] = stamp;
+            self.scratch.mark[corner.prev as usize] = stamp;
         }
         // Counted without a branch on the data (whether a neighbour of b is one of a's is as good
         // as random): each common neighbour once, and those not opposite the edge (the last one).
         let mut common = 0;
         let mut strays = 0;
         let mut stray = NONE;
-        for corner in &self.fans[b as usize] {
+        for corner in &self.topo.fans[b as usize] {
             for v in [corner.next, corner.prev] {
-                let mark = &mut self.mark[v as usize];
+                let mark = &mut self.scratch.mark[v as usize];
                 let hit = (v != a) & (*mark == stamp);
                 *mark = if hit { stamp.wrapping_sub(1) } else { *mark }; // count each neighbour once
                 let off_edge = hit & (v != opposite[0]) & (v != opposite[1]);
@@ -189,18 +92,18 @@ impl State<'_> {
             return Err(Refusal::Link);
         }
         // Rule 3, the merged vertex keeps enough faces.
-        let remaining = self.fans[a as usize].len() + self.fans[b as usize].len() - 2 * shared_count;
+        let remaining = self.topo.fans[a as usize].len() + self.topo.fans[b as usize].len() - 2 * shared_count;
         let interior = hole != NONE || (self.is_interior(a) && self.is_interior(b));
         if remaining < if interior { 3 } else { 1 } {
             return Err(Refusal::TooFewFaces);
         }
         // Rules 4–6 on each surviving face: normal change, needle, fold onto the face across.
         let p = to_f64(c.position);
-        let mut fan = std::mem::take(&mut self.fan_scratch);
+        let mut fan = std::mem::take(&mut self.scratch.fan_scratch);
         fan.clear();
         for (v, other) in [(a, b), (b, a)] {
             let pv = self.point(v);
-            for corner in &self.fans[v as usize] {
+            for corner in &self.topo.fans[v as usize] {
                 if corner.touches(other) {
                     continue;
                 }
@@ -210,12 +113,12 @@ impl State<'_> {
                 let n_new = (px - p).cross(py - p);
                 let (lo, ln) = (n_old.length(), n_new.length());
                 // (A zero-area new face passes this test and fails the next.)
-                if lo > 0.0 && n_old.dot(n_new) < self.cos_max_normal_change * lo * ln {
-                    self.fan_scratch = fan;
+                if lo > 0.0 && n_old.dot(n_new) < self.config.cos_max_normal_change * lo * ln {
+                    self.scratch.fan_scratch = fan;
                     return Err(Refusal::NormalChange);
                 }
                 if ln == 0.0 || triangle_quality(ln, p, px, py) < MIN_TRIANGLE_QUALITY {
-                    self.fan_scratch = fan;
+                    self.scratch.fan_scratch = fan;
                     return Err(Refusal::Needle);
                 }
                 let n_new = n_new / ln;
@@ -225,7 +128,7 @@ impl State<'_> {
                 let ruled_out = vx.cone.excludes_fold(vx.normal, n_new) || vy.cone.excludes_fold(vy.normal, n_new);
                 debug_assert!(!ruled_out || !self.folds_across(corner.face, a, b, [x, y], [px, py], n_new));
                 if !ruled_out && self.folds_across(corner.face, a, b, [x, y], [px, py], n_new) {
-                    self.fan_scratch = fan;
+                    self.scratch.fan_scratch = fan;
                     return Err(Refusal::Fold);
                 }
                 fan.push(([x, y], n_new));
@@ -239,28 +142,28 @@ impl State<'_> {
         // (checking all pairs cost a mispredicted branch per shared edge). A `spoke` entry left by
         // an earlier check is told apart by the face it names not having that `x`.
         for (i, &([x, _], _)) in fan.iter().enumerate() {
-            self.spoke[x as usize] = i as u32;
+            self.scratch.spoke[x as usize] = i as u32;
         }
         let mut folded = false;
         for &([_, y], n) in fan.iter() {
-            let before = fan.get(self.spoke[y as usize] as usize);
+            let before = fan.get(self.scratch.spoke[y as usize] as usize);
             folded |= before.is_some_and(|&([x, _], m)| (x == y) & (m.dot(n) < FOLD_DOT));
         }
         // Around a frozen survivor the new fan need not be a disk: every pair is looked at.
         let folded = if frozen { folds_pairwise(&fan) } else { folded };
         debug_assert!(frozen || folded == folds_pairwise(&fan), "spoke pairing disagrees with the pairwise check");
-        self.fan_scratch = fan;
+        self.scratch.fan_scratch = fan;
         if folded {
             return Err(Refusal::Fold);
         }
-        Ok(Legal { candidate: *c, check: self.check_id, hole })
+        Ok(Legal { candidate: *c, check: self.scratch.check_id, hole })
     }
 
     /// Whether edge (a, v) has, besides the face it shares with b, exactly one face, crossing the
     /// edge the other way (a → v in one, v → a in the other).
     fn attaches_cleanly(&self, a: u32, b: u32, v: u32) -> bool {
         let (mut forward, mut back, mut others) = (0, 0, 0);
-        for corner in &self.fans[a as usize] {
+        for corner in &self.topo.fans[a as usize] {
             forward += (corner.next == v) as u32;
             back += (corner.prev == v) as u32;
             others += (corner.touches(v) && !corner.touches(b)) as u32;
@@ -279,7 +182,7 @@ impl State<'_> {
     /// closing the hole makes no seam that rule 7 did not see.
     fn closes_hole(&self, a: u32, b: u32, c: u32, edge_face: Corner) -> bool {
         let plain = |v: u32| self.vertices[v as usize].kind == VertexKind::Boundary;
-        if !(plain(a) && plain(b) && plain(c)) || self.fans[c as usize].len() < 3 {
+        if !(plain(a) && plain(b) && plain(c)) || self.topo.fans[c as usize].len() < 3 {
             return false;
         }
         let only_face = |x: u32| match self.edge_corners(x, c) {
@@ -290,7 +193,7 @@ impl State<'_> {
         // With the face of (a, b) running a → b, the hole runs b → a → c: the face on (a, c) runs
         // c → a and the one on (b, c) b → c.
         let runs = if edge_face.next == b { ac.prev == c && bc.next == c } else { ac.next == c && bc.prev == c };
-        let values_agree = self.corner_source.is_empty() || {
+        let values_agree = self.seams.corner_source.is_empty() || {
             let same = |f: u32, g: u32, v: u32| self.same_values(self.source_at(f, v), self.source_at(g, v));
             same(ac.face, edge_face.face, a) && same(ac.face, bc.face, c)
         };
@@ -303,7 +206,7 @@ impl State<'_> {
             VertexKind::Interior => true,
             VertexKind::Boundary | VertexKind::Frozen | VertexKind::Locked => false,
             VertexKind::Anchored => {
-                let fan = &self.fans[v as usize];
+                let fan = &self.topo.fans[v as usize];
                 fan.iter().all(|c| fan.iter().any(|d| d.prev == c.next))
             }
         }
@@ -320,7 +223,7 @@ impl State<'_> {
         [px, py]: [DVec3; 2],
         n_new: DVec3,
     ) -> bool {
-        let across = self.fans[x as usize].iter().find(|d| {
+        let across = self.topo.fans[x as usize].iter().find(|d| {
             d.face != face && d.touches(y) && {
                 let z = d.other(y);
                 z != a && z != b
@@ -336,53 +239,68 @@ impl State<'_> {
 }
 
 impl State<'_> {
-    /// Keeps the [`NormalCone`]s exact after `a` moved and took over faces: each face around `a`
-    /// widens the cones of its two other corners, and `a`'s own cone is rebuilt around its new
-    /// normal from these faces alone (they are all its faces). With `checked`, the new normals are
-    /// the ones [`State::is_legal`] just computed for this collapse (its scratch holds exactly the
-    /// faces of `a`'s new fan); otherwise they are computed here.
-    pub(super) fn update_cones(&mut self, a: u32, checked: bool) {
-        let axis = self.vertices[a as usize].normal;
-        let mut cone = NormalCone::EMPTY;
-        if checked {
-            debug_assert_eq!(self.fan_scratch.len(), self.fans[a as usize].len());
-            for &([x, y], n) in &self.fan_scratch {
-                cone.widen(axis, n);
-                for v in [x, y] {
-                    let vertex = &mut self.vertices[v as usize];
-                    vertex.cone.widen(vertex.normal, n);
-                }
-            }
-            self.vertices[a as usize].cone = cone;
-            return;
+    /// Looks again at vertex `v` after a collapse took faces from it: whether a rule that held it
+    /// because of its sets of values no longer does, in which case its edges are to be ranked
+    /// again. Collapses only ever take sets away from a vertex (a removed vertex's corners take
+    /// the survivor's values), so what this lifts never comes back.
+    ///
+    /// - An anchor (three or more sets met at the start) whose faces now carry exactly two sets,
+    ///   with the same texture coordinates, is released: an ordinary vertex again (interior or
+    ///   boundary, as its fan is closed or not), still on its seam, so it moves along it. Where the
+    ///   two sets differ in normals only (a hard edge through the vertex, the texture continuous)
+    ///   it moves along that edge as any vertex of the edge does: on CesiumMan, whose anchors are
+    ///   mostly of that kind, the position error at 10% fell to a third and the texture error to a
+    ///   quarter (docs/attributes-report.md). The other anchors stay, as measured: released where
+    ///   the two sets differ in texture coordinates, fuze's seam vertices slid along the seam and
+    ///   nearly doubled its texture error; released where one set is left, Fox's position error
+    ///   at 74 faces rose from 0.154 to 0.200.
+    /// - A seam vertex whose faces now carry one set is off the seam: inside one chart, it collapses
+    ///   as the chart's other vertices do (pirate's texture error 5.7 → 5.3 texels).
+    ///
+    /// Nothing with locked seams, and no anchor with locked borders: those stay whatever their
+    /// corners.
+    pub(super) fn relax(&mut self, v: u32) -> bool {
+        let kind = self.vertices[v as usize].kind;
+        let anchor = kind == VertexKind::Anchored && self.config.options.boundary != BoundaryMode::Lock;
+        let seam = self.seams.on_seam[v as usize] && matches!(kind, VertexKind::Interior | VertexKind::Boundary);
+        if self.config.options.lock_seams || !(anchor || seam) {
+            return false;
         }
-        let p = self.point(a);
-        for i in 0..self.fans[a as usize].len() {
-            let Corner { next: x, prev: y, .. } = self.fans[a as usize][i];
-            let (px, py) = (self.point(x), self.point(y));
-            let cross = (px - p).cross(py - p);
-            let area2 = cross.length();
-            // `is_legal` refuses collapses that make a face this poor; a caller that skipped it
-            // gets cones that never rule a fold out, not wrong ones.
-            if area2 == 0.0 || triangle_quality(area2, p, px, py) < CONE_MIN_QUALITY {
-                cone = NormalCone::NEVER;
-                self.vertices[x as usize].cone = NormalCone::NEVER;
-                self.vertices[y as usize].cone = NormalCone::NEVER;
+        // A corner of each set met: no more than a seam vertex may lose (one) or an anchor keep
+        // (two) when the rule is to let go; one more settles it.
+        let most = if seam { 1 } else { 2 };
+        let fan = &self.topo.fans[v as usize];
+        let mut sets = [NONE; 2];
+        let mut count = 0;
+        for corner in fan {
+            let source = self.source_at(corner.face, v);
+            if sets[..count].iter().any(|&s| self.same_values(s, source)) {
                 continue;
             }
-            let n = cross / area2;
-            cone.widen(axis, n);
-            for v in [x, y] {
-                let vertex = &mut self.vertices[v as usize];
-                vertex.cone.widen(vertex.normal, n);
+            if count == most {
+                return false;
             }
+            sets[count] = source;
+            count += 1;
         }
-        self.vertices[a as usize].cone = cone;
+        if seam {
+            self.seams.on_seam[v as usize] = false;
+            return true;
+        }
+        let bits = |uv: &Option<Vec<[f32; 2]>>, k: u32| uv.as_ref().map(|uv| uv[k as usize].map(f32::to_bits));
+        let uvs = |k: u32| (bits(&self.seams.attributes.uvs, k), bits(&self.seams.attributes.uvs1, k));
+        if count != 2 || uvs(sets[0]) != uvs(sets[1]) {
+            return false;
+        }
+        let closed = fan.iter().all(|c| fan.iter().any(|d| d.prev == c.next));
+        self.vertices[v as usize].kind = if closed { VertexKind::Interior } else { VertexKind::Boundary };
+        true
     }
 }
 
 #[cfg(test)]
 pub(super) mod tests {
+    use super::super::vertex::NormalCone;
     use super::*;
 
     fn random_unit(rng: &mut crate::rng::SplitMix64) -> DVec3 {

@@ -133,6 +133,7 @@
 //!    (`State::relax`). Without attributes the rule costs nothing.
 
 mod attribute_quadric;
+mod candidate;
 mod classify;
 mod cost;
 mod fan_term;
@@ -147,15 +148,19 @@ mod prune;
 mod queue;
 mod retry;
 mod run;
+mod scratch;
+mod seams;
 mod search;
 mod sheets;
+mod terms;
+mod topology;
+mod vertex;
 
-pub(crate) use classify::VertexKind;
 pub use classify::prepare;
 pub(crate) use classify::prepare_with_attributes;
 pub use halves::HALVES_FROM_FACES;
 pub(crate) use kernel::State;
-pub use legality::{FOLD_DOT, MIN_TRIANGLE_QUALITY};
+pub use legality::MIN_TRIANGLE_QUALITY;
 pub use options::{
     AttributeWeights, BoundaryMode, DEFAULT_DISTANCE_TERM, Metric, NormalUpdate, Placement, Refusals, Simplified,
     SimplifyOptions, SimplifyStats, StopReason,
@@ -163,3 +168,5 @@ pub use options::{
 pub use pipeline::simplify;
 pub use run::MAX_PASSES;
 pub use search::{WSearch, simplify_search_w};
+pub use vertex::FOLD_DOT;
+pub(crate) use vertex::VertexKind;

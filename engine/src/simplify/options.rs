@@ -487,3 +487,18 @@ pub(super) struct Outcome {
     pub(super) halves: bool,
     pub(super) distance_term: f64,
 }
+
+/// What a run resolves once from its options.
+pub(crate) struct Config<'o> {
+    /// The options as given (placement resolved).
+    pub(crate) options: &'o SimplifyOptions,
+    /// The cosine of the largest normal change one collapse may cause.
+    pub(crate) cos_max_normal_change: f64,
+}
+
+impl<'o> Config<'o> {
+    /// The run's configuration from its options.
+    pub(crate) fn new(options: &'o SimplifyOptions) -> Config<'o> {
+        Config { options, cos_max_normal_change: options.max_normal_change_degrees.to_radians().cos() }
+    }
+}

@@ -113,7 +113,7 @@ fn one_sequence(
     let collapses = run.log.len();
     let holes_closed = run.log.iter().filter(|r| r.hole != crate::pm::NO_VERTEX).count();
     // 6. Outputs. The guard's tree and tables are done with: their memory goes back first.
-    state.guard = None;
+    state.terms.guard = None;
     state.rebuild_triangles(&prepared, &run.log);
     // The output mesh and the progressive mesh read the state only: built side by side where the
     // pool has threads for them.
@@ -121,7 +121,7 @@ fn one_sequence(
         faces_in,
         || {
             let out = state.output_mesh();
-            let live = (0..state.face_alive.len()).filter(|&f| state.face_alive[f]);
+            let live = (0..state.topo.face_alive.len()).filter(|&f| state.topo.face_alive[f]);
             sheets::with_backs(out, live, &state.backs)
         },
         || {
@@ -130,14 +130,14 @@ fn one_sequence(
                     &prepared,
                     input_vertex,
                     |v| state.vertices[v as usize].position,
-                    &state.triangles,
-                    &state.face_alive,
+                    &state.topo.triangles,
+                    &state.topo.face_alive,
                     std::mem::take(&mut run.log),
-                    (!state.corner_source.is_empty()).then(|| crate::pm::AttributeLog {
-                        values: &state.attributes,
-                        corner_source: &state.corner_source,
-                        journal: &state.journal,
-                        journal_ends: &state.journal_ends,
+                    (!state.seams.corner_source.is_empty()).then(|| crate::pm::AttributeLog {
+                        values: &state.seams.attributes,
+                        corner_source: &state.seams.corner_source,
+                        journal: &state.seams.journal,
+                        journal_ends: &state.seams.journal_ends,
                     }),
                 )
             })
@@ -156,6 +156,6 @@ fn one_sequence(
         dropped_duplicate_faces: set_aside.copies,
         back_faces: set_aside.twins,
         halves: false,
-        distance_term: state.fan_term,
+        distance_term: state.terms.fan_term,
     })
 }

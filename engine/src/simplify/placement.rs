@@ -4,9 +4,10 @@
 
 use glam::DVec3;
 
-use super::classify::VertexKind;
-use super::kernel::{State, to_f64};
+use super::kernel::State;
 use super::options::{BoundaryMode, Metric, Placement};
+use super::vertex::VertexKind;
+use super::vertex::to_f64;
 
 /// Which endpoint of an edge survives its collapse.
 #[derive(Debug, Clone, Copy)]
@@ -34,7 +35,7 @@ impl State<'_> {
     pub(super) fn choose(&self, a: u32, b: u32) -> Option<Choice> {
         let (va, vb) = (&self.vertices[a as usize], &self.vertices[b as usize]);
         let (ka, kb) = (va.kind, vb.kind);
-        let lock = self.options.boundary == BoundaryMode::Lock;
+        let lock = self.config.options.boundary == BoundaryMode::Lock;
         // A frozen vertex stays where it is, as an anchor does, and takes in a neighbour only
         // where its own edges to the collapse's opposite vertices are manifold (rule 1, checked
         // with the link condition in `is_legal`).
@@ -62,10 +63,10 @@ impl State<'_> {
             _ => (true, true, true),
         };
         // With attributes, an edge with one end on a seam keeps that end where it is (rule 7).
-        let (may_keep_a, may_keep_b, may_move) = if self.on_seam.is_empty() {
+        let (may_keep_a, may_keep_b, may_move) = if self.seams.on_seam.is_empty() {
             (may_keep_a, may_keep_b, may_move)
         } else {
-            match (self.on_seam[a as usize], self.on_seam[b as usize]) {
+            match (self.seams.on_seam[a as usize], self.seams.on_seam[b as usize]) {
                 (true, false) if may_keep_a => (true, false, false),
                 (false, true) if may_keep_b => (false, true, false),
                 (true, false) | (false, true) => return None,
@@ -73,8 +74,11 @@ impl State<'_> {
             }
         };
         let (pa, pb) = (to_f64(va.position), to_f64(vb.position));
-        let quadric_cost = matches!(self.options.metric, Metric::Qem | Metric::Qfvp { .. });
-        if quadric_cost && self.wedges.is_none() && !(may_move && self.options.placement != Placement::Endpoint) {
+        let quadric_cost = matches!(self.config.options.metric, Metric::Qem | Metric::Qfvp { .. });
+        if quadric_cost
+            && self.terms.wedges.is_none()
+            && !(may_move && self.config.options.placement != Placement::Endpoint)
+        {
             // The endpoints alone, without attribute quadrics (every ranking on a mesh with
             // texture coordinates, whose `auto` placement is `endpoint`): the choice of the general
             // path below, the same operations in the same order, without its closures.
@@ -97,7 +101,7 @@ impl State<'_> {
             }
         };
         let q = va.quadric + vb.quadric;
-        match self.options.metric {
+        match self.config.options.metric {
             Metric::Melax => {
                 if may_keep_b {
                     consider(Keep::B, pb, self.melax_cost(a, b), q.error(pb));
@@ -120,7 +124,7 @@ impl State<'_> {
                 // The survivor is resolved only for the attribute quadrics: that of a moving
                 // collapse reads both fans' lengths, and when every edge is first ranked the fans
                 // of its higher end are not in cache (half of this function's time there, perf).
-                let weighted = self.wedges.is_some();
+                let weighted = self.terms.wedges.is_some();
                 let appearance = |keep: Keep, p: DVec3| {
                     if weighted {
                         let survivor = self.survivor(keep, a, b);
@@ -129,7 +133,7 @@ impl State<'_> {
                         0.0
                     }
                 };
-                let optimal = may_move && self.options.placement == Placement::Optimal;
+                let optimal = may_move && self.config.options.placement == Placement::Optimal;
                 if optimal
                     && !on_boundary
                     && let Some(p) = q.minimizer()
@@ -149,7 +153,7 @@ impl State<'_> {
                 if may_keep_b {
                     consider(Keep::B, pb, (e_b + appearance(Keep::B, pb)) * factor, e_b);
                 }
-                if may_move && self.options.placement != Placement::Endpoint {
+                if may_move && self.config.options.placement != Placement::Endpoint {
                     let mid = (pa + pb) * 0.5;
                     let e_mid = q.error(mid);
                     consider(mover, mid, (e_mid + appearance(mover, mid)) * factor, e_mid);

@@ -193,20 +193,20 @@ impl<'m> Parts<'m> {
                 continue;
             }
             let faces = self.faces.get(p);
-            let alive = faces.iter().filter(|&&f| state.face_alive[f as usize]).count();
+            let alive = faces.iter().filter(|&&f| state.topo.face_alive[f as usize]).count();
             if faces_alive < target + taken + alive {
                 self.done = true;
                 break;
             }
             for &f in faces {
-                state.face_alive[f as usize] = false;
+                state.topo.face_alive[f as usize] = false;
             }
             for &v in self.vertices.get(p) {
-                if state.vertex_alive[v as usize] {
-                    state.vertex_alive[v as usize] = false;
-                    state.fans[v as usize] = Default::default();
+                if state.topo.vertex_alive[v as usize] {
+                    state.topo.vertex_alive[v as usize] = false;
+                    state.topo.fans[v as usize] = Default::default();
                     // Its queue entries are stale from now on.
-                    state.version[v as usize] = state.version[v as usize].wrapping_add(1);
+                    state.topo.version[v as usize] = state.topo.version[v as usize].wrapping_add(1);
                 }
             }
             taken += alive;

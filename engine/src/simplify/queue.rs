@@ -5,10 +5,12 @@
 use crate::quadric::QuadricPair;
 use crate::queue::{QueueEntry, TieredQueue, order_key};
 
-use super::classify::VertexKind;
 use super::guard::GUARDED;
-use super::kernel::{NONE, State, to_f64};
+use super::kernel::State;
 use super::options::{Metric, Placement};
+use super::placement::Choice;
+use super::vertex::VertexKind;
+use super::vertex::{NONE, to_f64};
 
 impl State<'_> {
     pub(super) fn push_edges_of(&mut self, v: u32, heap: &mut TieredQueue, neighbours: &mut Vec<u32>) {
@@ -36,13 +38,13 @@ impl State<'_> {
         // Written unconditionally and kept by advancing the count: whether a corner's vertex was
         // seen already is as good as random (each is seen twice around an interior vertex).
         let stamp = self.next_stamp();
-        let fan = &self.fans[v as usize];
+        let fan = &self.topo.fans[v as usize];
         neighbours.clear();
         neighbours.resize(2 * fan.len(), NONE);
         let mut count = 0;
         for c in fan {
             for u in [c.next, c.prev] {
-                let mark = &mut self.mark[u as usize];
+                let mark = &mut self.scratch.mark[u as usize];
                 neighbours[count] = u;
                 count += ((*mark != stamp) & (u >= from) && keep(u)) as usize;
                 *mark = stamp;
@@ -72,11 +74,12 @@ impl State<'_> {
         let vv = &self.vertices[v as usize];
         let (v0, v1) = (&self.vertices[us[0] as usize], &self.vertices[us[1] as usize]);
         // (The attribute quadrics need the wedges: an edge with them is ranked alone.)
-        let quadric_cost = self.options.metric != Metric::Melax
-            && self.options.placement == Placement::Optimal
-            && self.wedges.is_none();
+        let quadric_cost = self.config.options.metric != Metric::Melax
+            && self.config.options.placement == Placement::Optimal
+            && self.terms.wedges.is_none();
         let interior = quadric_cost & (vv.kind == VertexKind::Interior);
-        let free = |u: u32| self.on_seam.is_empty() || self.on_seam[v as usize] == self.on_seam[u as usize];
+        let free =
+            |u: u32| self.seams.on_seam.is_empty() || self.seams.on_seam[v as usize] == self.seams.on_seam[u as usize];
         let usual = [
             interior & (v0.kind == VertexKind::Interior) && free(us[0]),
             interior & (v1.kind == VertexKind::Interior) && free(us[1]),
@@ -129,7 +132,32 @@ impl State<'_> {
     /// Sum of the version stamps of `a` and `b` (see [`QueueEntry::stamp`]).
     #[inline]
     pub(super) fn stamp(&self, a: u32, b: u32) -> u32 {
-        self.version[a as usize].wrapping_add(self.version[b as usize])
+        self.topo.version[a as usize].wrapping_add(self.topo.version[b as usize])
+    }
+
+    /// The queue key of edge {a, b} with its distance term added (the distance guard's when it is
+    /// on, else the fan-distance term): never below the key [`State::entry`] gives it, which
+    /// leaves the term out; with the choice it was computed for. The attribute quadrics' part of
+    /// the choice's cost stays in the key.
+    pub(super) fn guarded_key(&self, a: u32, b: u32) -> Option<(u32, Choice)> {
+        let choice = self.choose(a, b)?;
+        let (va, vb) = (&self.vertices[a as usize], &self.vertices[b as usize]);
+        let area = va.quadric.weight + vb.quadric.weight;
+        let factor = self.normal_factor(va, vb);
+        let length2 = (to_f64(va.position) - to_f64(vb.position)).length_squared();
+        let (weight, d2) = match &self.terms.guard {
+            Some(guard) => {
+                (self.config.options.guard, guard.distance2(&self.topo, &self.vertices, a, b, choice.position))
+            }
+            None => (self.terms.fan_term, self.moved_fan_distance2(a, b, choice.position)),
+        };
+        // The cost before the normal factor: the quadric error, plus the attribute quadrics' error
+        // where they are on (their cost is `(error + attributes) · factor`).
+        let cost = match self.terms.wedges {
+            Some(_) if factor > 0.0 => choice.cost / factor,
+            _ => choice.error,
+        };
+        Some((order_key((self.ranked_cost(cost, area) + weight * d2) * factor, choice.error, length2), choice))
     }
 }
 
@@ -193,7 +221,7 @@ mod tests {
                     let together = state.entry_pair(v, [pair[0], pair[1]]);
                     let alone = [state.entry(v, pair[0]), state.entry(v, pair[1])];
                     assert_eq!(together, alone, "{name}: vertex {v}, neighbours {pair:?}");
-                    let on_seam = |u: u32| state.on_seam.get(u as usize).copied().unwrap_or(false);
+                    let on_seam = |u: u32| state.seams.on_seam.get(u as usize).copied().unwrap_or(false);
                     seam_pairs += pair.iter().any(|&u| on_seam(u) != on_seam(v)) as usize;
                 }
             }

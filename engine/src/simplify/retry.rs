@@ -16,7 +16,8 @@
 
 use crate::pm::CollapseRecord;
 
-use super::kernel::{NONE, State};
+use super::kernel::State;
+use super::vertex::NONE;
 
 /// Refusals and the collapses near each vertex, kept for the passes after the first.
 #[derive(Default)]
@@ -80,10 +81,10 @@ impl Retry {
                 *c = (*c).max(stamp);
             };
             mark(r);
-            for corner in &state.fans[r as usize] {
+            for corner in &state.topo.fans[r as usize] {
                 for x in [corner.next, corner.prev] {
                     mark(x);
-                    for far in &state.fans[x as usize] {
+                    for far in &state.topo.fans[x as usize] {
                         mark(far.next);
                         mark(far.prev);
                     }
@@ -113,8 +114,9 @@ mod tests {
     use std::collections::VecDeque;
 
     use super::super::SimplifyOptions;
-    use super::super::cost::Candidate;
-    use super::super::kernel::{NONE, State};
+    use super::super::candidate::Candidate;
+    use super::super::kernel::State;
+    use super::super::vertex::NONE;
     use super::Retry;
 
     /// Edge distances from `from` over the live fans.
@@ -123,7 +125,7 @@ mod tests {
         d[from as usize] = 0;
         let mut queue = VecDeque::from([from]);
         while let Some(v) = queue.pop_front() {
-            for corner in &state.fans[v as usize] {
+            for corner in &state.topo.fans[v as usize] {
                 for u in [corner.next, corner.prev] {
                     if d[u as usize] == NONE {
                         d[u as usize] = d[v as usize] + 1;
@@ -145,7 +147,7 @@ mod tests {
         let legal = state.is_legal(&candidate).expect("a torus edge collapses");
         let log = vec![state.collapse(legal)];
         let d = distances(&state, 0);
-        let alive = |e: &&[u32; 2]| e.iter().all(|&v| state.vertex_alive[v as usize]);
+        let alive = |e: &&[u32; 2]| e.iter().all(|&v| state.topo.vertex_alive[v as usize]);
         let near = edges.iter().filter(alive).find(|e| d[e[0] as usize] == 2 && d[e[1] as usize] == 3).unwrap();
         let far = edges.iter().filter(alive).find(|e| d[e[0] as usize] >= 3 && d[e[1] as usize] >= 3).unwrap();
         let late = edges.iter().filter(alive).find(|e| d[e[0] as usize] == 1).unwrap();

@@ -10,10 +10,11 @@ use crate::pm::CollapseRecord;
 use crate::queue::{QueueEntry, TieredQueue};
 
 use super::guard::GUARDED;
-use super::kernel::{NONE, State, to_f64};
+use super::kernel::State;
 use super::options::{Refusals, StopReason};
 use super::prune::Parts as Prune;
 use super::retry::Retry;
+use super::vertex::{NONE, to_f64};
 
 /// Passes at most: when the queue runs dry before the target, a new pass queues again the edges
 /// refused before a collapse came near them (`super::retry`), which may have become legal since.
@@ -98,12 +99,12 @@ pub(super) fn run(
     faces_in: usize,
     target: usize,
 ) -> Result<Run, MeshError> {
-    let options = state.options;
+    let options = state.config.options;
     let vertex_count = state.vertices.len();
     // The faces left: `faces_alive` counts a face whose back was set aside twice, as the output
     // (and so the target) has both (`super::sheets`); `live` counts the state's faces once each.
     let mut faces_alive = faces_in;
-    let mut live = state.face_alive.len();
+    let mut live = state.topo.face_alive.len();
     let mut log: Vec<CollapseRecord> =
         Vec::with_capacity(log_reserve(faces_in, target, state.open_vertices, vertex_count));
     let mut neighbours = Vec::new();
@@ -111,17 +112,17 @@ pub(super) fn run(
     let mut retry = Retry::default();
     // Seams and anchors are looked at again after each collapse that takes faces from their
     // vertices (meshes with per-corner attributes only: without them there are none).
-    let with_attributes = !state.corner_source.is_empty();
+    let with_attributes = !state.seams.corner_source.is_empty();
     let mut pops = 0usize;
     let mut passes = 1;
     let mut collapses_this_pass = 0;
     let mut max_collapse_error: f64 = 0.0;
     // The face count from which the distance term is measured: the guard's from the start, the
     // fan-distance term's once 70% of the input's faces are gone ([`super::fan_term::FAN_TERM_FROM`]).
-    let term_from = if state.guard.is_some() {
+    let term_from = if state.terms.guard.is_some() {
         live
     } else {
-        (state.term_base as f64 * (1.0 - super::fan_term::FAN_TERM_FROM)).round() as usize
+        (state.terms.term_base as f64 * (1.0 - super::fan_term::FAN_TERM_FROM)).round() as usize
     };
     let stop_reason = loop {
         // Parts as small as the error reached so far go whole, while the target allows.
@@ -155,7 +156,7 @@ pub(super) fn run(
             collapses_this_pass = 0;
             retry.prepare(state, &log);
             for v in 0..vertex_count as u32 {
-                if state.vertex_alive[v as usize] {
+                if state.topo.vertex_alive[v as usize] {
                     neighbours.clear();
                     state.push_edges_where(v, v + 1, &mut heap, &mut neighbours, |u| retry.needs(v, u));
                 }

@@ -10,7 +10,8 @@
 
 use crate::mesh::Mesh;
 
-use super::kernel::{NONE, State};
+use super::topology::Topology;
+use super::vertex::NONE;
 
 /// The back set aside for a face of the one-sided mesh.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -44,54 +45,52 @@ pub(super) struct Stacked {
     pub(super) backs: Vec<Back>,
 }
 
-impl State<'_> {
-    /// The faces face `f` stands for in the output: itself and its back, if one was set aside for
-    /// it (none for [`NONE`]).
-    #[inline]
-    pub(super) fn output_faces(&self, f: u32) -> usize {
-        if f == NONE { 0 } else { 1 + self.backs.get(f as usize).is_some_and(|&b| b != Back::None) as usize }
-    }
+/// The faces face `f` stands for in the output: itself and its back, if one was set aside for
+/// it (none for `NONE`).
+#[inline]
+pub(super) fn output_faces(backs: &[Back], f: u32) -> usize {
+    if f == NONE { 0 } else { 1 + backs.get(f as usize).is_some_and(|&b| b != Back::None) as usize }
+}
 
-    /// The faces of `mesh` (the state's) stacked on an earlier face with its values. Such faces
-    /// freeze their vertices, so only the fans of the vertices the scan found frozen are looked
-    /// at: a mesh without them costs nothing.
-    pub(super) fn stacked_faces(&self, mesh: &Mesh) -> Vec<StackedFace> {
-        let mut found = Vec::new();
-        let mut at = Vec::new();
-        for &v in &self.frozen_at_start {
-            // Each face once: at its lowest vertex, by its other two (unordered), then by number.
-            at.clear();
-            at.extend(
-                self.fans[v as usize]
-                    .iter()
-                    .filter(|c| v < c.next && v < c.prev)
-                    .map(|c| (c.next.min(c.prev), c.next.max(c.prev), c.face, c.next)),
-            );
-            at.sort_unstable();
-            for run in at.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)).filter(|run| run.len() > 1) {
-                let (_, _, on, on_next) = run[0];
-                // Whether the first back found has its normals turned round.
-                let mut first_back = None;
-                for &(_, _, face, next) in &run[1..] {
-                    let Some(flipped) = values_of(mesh, on, face) else { continue };
-                    let back = match (next != on_next, first_back) {
-                        // The same way round with its normals turned: not a copy.
-                        (false, _) if flipped => continue,
-                        (false, _) => None,
-                        (true, None) => {
-                            first_back = Some(flipped);
-                            Some(if flipped { Back::Flipped } else { Back::Same })
-                        }
-                        // A second back: a copy of the first, unless its normals differ from it.
-                        (true, Some(first)) if first == flipped => None,
-                        (true, Some(_)) => continue,
-                    };
-                    found.push(StackedFace { face, on, back });
-                }
+/// The faces of `mesh` (the state's) stacked on an earlier face with its values. Such faces
+/// freeze their vertices, so only the fans of the vertices the scan found frozen are looked
+/// at: a mesh without them costs nothing.
+pub(super) fn stacked_faces(topo: &Topology, frozen_at_start: &[u32], mesh: &Mesh) -> Vec<StackedFace> {
+    let mut found = Vec::new();
+    let mut at = Vec::new();
+    for &v in frozen_at_start {
+        // Each face once: at its lowest vertex, by its other two (unordered), then by number.
+        at.clear();
+        at.extend(
+            topo.fans[v as usize]
+                .iter()
+                .filter(|c| v < c.next && v < c.prev)
+                .map(|c| (c.next.min(c.prev), c.next.max(c.prev), c.face, c.next)),
+        );
+        at.sort_unstable();
+        for run in at.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)).filter(|run| run.len() > 1) {
+            let (_, _, on, on_next) = run[0];
+            // Whether the first back found has its normals turned round.
+            let mut first_back = None;
+            for &(_, _, face, next) in &run[1..] {
+                let Some(flipped) = values_of(mesh, on, face) else { continue };
+                let back = match (next != on_next, first_back) {
+                    // The same way round with its normals turned: not a copy.
+                    (false, _) if flipped => continue,
+                    (false, _) => None,
+                    (true, None) => {
+                        first_back = Some(flipped);
+                        Some(if flipped { Back::Flipped } else { Back::Same })
+                    }
+                    // A second back: a copy of the first, unless its normals differ from it.
+                    (true, Some(first)) if first == flipped => None,
+                    (true, Some(_)) => continue,
+                };
+                found.push(StackedFace { face, on, back });
             }
         }
-        found
     }
+    found
 }
 
 /// How face `g`'s corners carry face `f`'s values, vertex by vertex (the two on the same three

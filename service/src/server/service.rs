@@ -11,9 +11,9 @@ use tokio::sync::mpsc;
 use tokio_stream::wrappers::ReceiverStream;
 use tonic::{Request, Response, Status};
 
-use super::config::ServerConfig;
 use super::admission::Admission;
 use super::codes;
+use super::config::ServerConfig;
 use crate::convert::{self, engine_status, mesh_from_input, mesh_to_proto, progressive_to_proto, split_to_proto};
 use crate::jobs;
 use crate::metrics::Metrics;

@@ -138,4 +138,3 @@ pub(super) fn read(
         indices,
     })
 }
-

@@ -26,8 +26,8 @@ use gltf::mesh::Mode;
 
 use super::accessor::{finite, quantized};
 use super::checks;
-use crate::io::options::ReadLimits;
 use crate::error::MeshError;
+use crate::io::options::ReadLimits;
 use crate::mesh::{CornerAttributes, Image, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL, Rig};
 
 /// Extensions whose data meshlod cannot decode; a file that requires one is refused by name.
@@ -129,7 +129,8 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
                         )
                     })?;
                     let file = folder.join(uri.replace("%20", " "));
-                    crate::io::files::read_referenced(&file).map_err(|e| err(&at, format!("'{}': {e}", file.display())))?
+                    crate::io::files::read_referenced(&file)
+                        .map_err(|e| err(&at, format!("'{}': {e}", file.display())))?
                 }
             }
         };
