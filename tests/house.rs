@@ -120,7 +120,8 @@ fn no_library_function_is_over_100_lines() {
 
 #[test]
 fn no_crate_has_an_import_circle() {
-    for src in ["engine/src", "service/src", "predictor/src"] {
+    // (The predictor is one file: nothing to go round.)
+    for src in ["engine/src", "service/src"] {
         let graph = graph(&repo().join(src));
         assert!(!graph.is_empty(), "{src}: no modules found");
         let circles = circles(&graph);
