@@ -92,6 +92,11 @@ trap 'kill $server 2>/dev/null || true' EXIT
 .venv/bin/python examples/python/client.py --server "127.0.0.1:$port" \
   --mesh "$(dirname "$MESHLOD")/example-torus.ply" --out "$(dirname "$MESHLOD")/example-torus-10.obj"
 "$MESHLOD" info "$(dirname "$MESHLOD")/example-torus-10.obj" --json > /dev/null
+# Any mesh file in, a GLB back.
+"$MESHLOD" convert "$(dirname "$MESHLOD")/example-torus.ply" -o "$(dirname "$MESHLOD")/example-torus.glb"
+.venv/bin/python examples/python/client.py --server "127.0.0.1:$port" \
+  --mesh "$(dirname "$MESHLOD")/example-torus.glb" --keep 0.25 --out "$(dirname "$MESHLOD")/example-torus-25.glb"
+"$MESHLOD" info "$(dirname "$MESHLOD")/example-torus-25.glb" --json > /dev/null
 kill -TERM "$server"
 wait "$server"
 trap - EXIT

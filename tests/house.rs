@@ -72,25 +72,17 @@ fn functions(text: &str) -> Vec<(String, usize)> {
 
 /// Library functions still over 100 lines, as `file:function`: each is to be split into steps,
 /// and the list only shrinks (a function split must leave it, a new long one fails).
-const STILL_LONG: [&str; 18] = [
-    "engine/src/hausdorff/bounds.rs:directed_bounds",
-    "engine/src/hausdorff/patch.rs:patch_bound",
+const STILL_LONG: [&str; 10] = [
     "engine/src/io/gltf/read.rs:read",
     "engine/src/io/gltf/read.rs:read_primitive",
     "engine/src/io/gltf/write.rs:write_gltf_with",
     "engine/src/io/obj.rs:read_obj",
     "engine/src/io/off.rs:read_off",
     "engine/src/io/ply.rs:read_ply",
-    "engine/src/pm_format/compact.rs:decode_attributes",
     "engine/src/pm_format/compact.rs:decode_geometry",
     "engine/src/refine/coarsen.rs:coarsen",
-    "engine/src/refine/mod.rs:refine",
-    "engine/src/simplify/halves.rs:simplify",
-    "engine/src/simplify/kernel.rs:collapse",
-    "engine/src/simplify/legality.rs:is_legal",
     "engine/src/simplify/placement.rs:choose",
     "engine/src/simplify/run.rs:run",
-    "engine/src/validate.rs:validate",
 ];
 
 #[test]

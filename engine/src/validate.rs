@@ -125,16 +125,7 @@ pub fn validate(mesh: &Mesh) -> MeshReport {
 
     let boundary_loops = count_boundary_loops(&topology);
 
-    let mut sets = UnionFind::new(mesh.vertex_count());
-    for t in tris {
-        sets.union(t[0], t[1]);
-        sets.union(t[1], t[2]);
-    }
-    let mut roots: Vec<u32> =
-        (0..mesh.vertex_count() as u32).filter(|&v| referenced[v as usize]).map(|v| sets.find(v)).collect();
-    roots.sort_unstable();
-    roots.dedup();
-    let components = roots.len();
+    let components = component_count(mesh, &referenced);
 
     let bounds = mesh.bounds().unwrap_or(Bounds { min: [0.0; 3], max: [0.0; 3] });
     let referenced_count = (mesh.vertex_count() - unreferenced_vertices) as i64;
@@ -162,6 +153,20 @@ pub fn validate(mesh: &Mesh) -> MeshReport {
         seam_edges,
         point_and_line_primitives: mesh.corners.library.as_ref().map_or(0, |l| l.other_primitives.len()),
     }
+}
+
+/// Number of connected components (through shared vertices) among the `referenced` vertices.
+fn component_count(mesh: &Mesh, referenced: &[bool]) -> usize {
+    let mut sets = UnionFind::new(mesh.vertex_count());
+    for t in &mesh.triangles {
+        sets.union(t[0], t[1]);
+        sets.union(t[1], t[2]);
+    }
+    let mut roots: Vec<u32> =
+        (0..mesh.vertex_count() as u32).filter(|&v| referenced[v as usize]).map(|v| sets.find(v)).collect();
+    roots.sort_unstable();
+    roots.dedup();
+    roots.len()
 }
 
 /// Number of fans (groups of faces connected through edges at `v`) around a vertex.

@@ -229,9 +229,16 @@ pub(crate) fn patch_bound(
         }
     }
     scratch.slots = own;
+    covered(&t2, scratch).then_some(bound)
+}
+
+/// Whether the kept triangles' projections (`scratch.kept`, their edges `scratch.edges`) cover
+/// T's, `t2`: (1) every corner of T lies in some kept triangle, and no boundary edge of the kept
+/// set (2) crosses an edge of T or (3) has an end strictly inside T.
+fn covered(t2: &[DVec2; 3], scratch: &mut Scratch) -> bool {
     // (1) Every corner of T in some kept triangle.
     if !t2.iter().all(|&p| scratch.kept.iter().any(|&t| in_triangle(p, t))) {
-        return None;
+        return false;
     }
     // Boundary edges: used by one kept triangle only.
     scratch.edges.sort_unstable_by_key(|e| e.0);
@@ -248,15 +255,15 @@ pub(crate) fn patch_bound(
             // (2) and (3).
             if !shared
                 && ((0..3).any(|k| segments_meet(t2[k], t2[(k + 1) % 3], e.3, e.4))
-                    || strictly_in_triangle(e.3, t2)
-                    || strictly_in_triangle(e.4, t2))
+                    || strictly_in_triangle(e.3, *t2)
+                    || strictly_in_triangle(e.4, *t2))
             {
-                return None;
+                return false;
             }
         }
         i = j;
     }
-    Some(bound)
+    true
 }
 
 #[cfg(test)]

@@ -67,33 +67,7 @@ pub fn read_off(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
     limits.check_faces(face_count, path)?;
 
     // Reserve no more than the text could hold: a vertex line has at least 6 bytes.
-    let mut positions: Vec<[f32; 3]> = Vec::with_capacity((vertex_count as usize).min(bytes.len() / 6));
-    for v in 0..vertex_count {
-        let (n, l) = lines.next().ok_or_else(|| {
-            MeshError::parse(path, "end of file", format!("truncated: {v} of {vertex_count} vertices"))
-        })?;
-        let mut p = [0f32; 3];
-        let mut tokens = l.split_ascii_whitespace();
-        for (k, slot) in p.iter_mut().enumerate() {
-            let token = tokens.next().ok_or_else(|| {
-                MeshError::parse(path, format!("line {n}"), format!("vertex {v} needs 3 numbers, found {k}"))
-            })?;
-            *slot = token.parse().map_err(|_| {
-                MeshError::parse(path, format!("line {n}"), format!("vertex {v}: '{token}' is not a number"))
-            })?;
-            if !slot.is_finite() {
-                return Err(MeshError::parse(
-                    path,
-                    format!("line {n}"),
-                    format!("vertex {v} has a non-finite coordinate"),
-                ));
-            }
-        }
-        if v % 4096 == 0 {
-            limits.check_cancel()?;
-        }
-        positions.push(p);
-    }
+    let positions = read_vertices(&mut lines, vertex_count, bytes.len() / 6, path, limits)?;
 
     let mut triangles: Vec<[u32; 3]> = Vec::with_capacity((face_count as usize).min(bytes.len() / 8));
     let (mut indices, mut local, mut points) = (Vec::new(), Vec::new(), Vec::new());
@@ -148,6 +122,44 @@ pub fn read_off(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
         }
     }
     Mesh::new(positions, triangles)
+}
+
+/// The `vertex_count` vertex lines that follow the header (`room`: the most the text could hold).
+fn read_vertices<'a>(
+    lines: &mut impl Iterator<Item = (usize, &'a str)>,
+    vertex_count: u64,
+    room: usize,
+    path: &Path,
+    limits: &ReadLimits,
+) -> Result<Vec<[f32; 3]>, MeshError> {
+    let mut positions: Vec<[f32; 3]> = Vec::with_capacity((vertex_count as usize).min(room));
+    for v in 0..vertex_count {
+        let (n, l) = lines.next().ok_or_else(|| {
+            MeshError::parse(path, "end of file", format!("truncated: {v} of {vertex_count} vertices"))
+        })?;
+        let mut p = [0f32; 3];
+        let mut tokens = l.split_ascii_whitespace();
+        for (k, slot) in p.iter_mut().enumerate() {
+            let token = tokens.next().ok_or_else(|| {
+                MeshError::parse(path, format!("line {n}"), format!("vertex {v} needs 3 numbers, found {k}"))
+            })?;
+            *slot = token.parse().map_err(|_| {
+                MeshError::parse(path, format!("line {n}"), format!("vertex {v}: '{token}' is not a number"))
+            })?;
+            if !slot.is_finite() {
+                return Err(MeshError::parse(
+                    path,
+                    format!("line {n}"),
+                    format!("vertex {v} has a non-finite coordinate"),
+                ));
+            }
+        }
+        if v % 4096 == 0 {
+            limits.check_cancel()?;
+        }
+        positions.push(p);
+    }
+    Ok(positions)
 }
 
 #[cfg(test)]

@@ -155,28 +155,7 @@ pub(super) fn decode_geometry(
     }
     let mut b = BitReader::new(bytes);
     let cut = |_: OutOfBits| MeshError::parse(r.path, format!("byte {start}"), "the geometry section is truncated");
-    let mut at: Vec<[i64; 3]> = Vec::with_capacity(n0 + k);
-    for _ in 0..n0 {
-        let mut q = [0i64; 3];
-        for c in &mut q {
-            *c = b.get(grid.bits as u32).map_err(cut)? as i64;
-        }
-        at.push(q);
-    }
-    let mut triangles = Vec::with_capacity(f0);
-    for f in 0..f0 {
-        let mut t = [0u32; 3];
-        for v in &mut t {
-            *v = b.get(width_for(n0 as u64)).map_err(cut)? as u32;
-        }
-        if let Some(&bad) = t.iter().find(|&&v| v as usize >= n0) {
-            return Err(MeshError::parse(r.path, format!("base face {f}"), format!("vertex {bad} out of range")));
-        }
-        triangles.push(t);
-    }
-    let positions: Vec<[f32; 3]> = at.iter().map(|q| grid.value(q)).collect();
-    let base = Mesh { positions, triangles, corners: Default::default() };
-    base.check().map_err(|e| MeshError::parse(r.path, "base mesh", e.to_string()))?;
+    let (mut at, base) = decode_base(&mut b, &grid, (n0, f0, k), r.path, start)?;
     let mut fans = Fans::new(&base.triangles, n0 + k, f0 + 2 * k);
     let mut codes = GeometryCodes::default();
     let mut splits = Vec::with_capacity(k);
@@ -262,6 +241,41 @@ pub(super) fn decode_geometry(
         return Err(MeshError::parse(r.path, format!("byte {start}"), "unexpected bits after the last split"));
     }
     Ok((base, splits, grid))
+}
+
+/// The base mesh at the start of the geometry section: `n0` positions on `grid` (returned too, as
+/// grid integers, with room for the `k` splits' vertices), then `f0` faces, checked.
+fn decode_base(
+    b: &mut BitReader,
+    grid: &Grid<3>,
+    (n0, f0, k): (usize, usize, usize),
+    path: &std::path::Path,
+    start: usize,
+) -> Result<(Vec<[i64; 3]>, Mesh), MeshError> {
+    let cut = |_: OutOfBits| MeshError::parse(path, format!("byte {start}"), "the geometry section is truncated");
+    let mut at: Vec<[i64; 3]> = Vec::with_capacity(n0 + k);
+    for _ in 0..n0 {
+        let mut q = [0i64; 3];
+        for c in &mut q {
+            *c = b.get(grid.bits as u32).map_err(cut)? as i64;
+        }
+        at.push(q);
+    }
+    let mut triangles = Vec::with_capacity(f0);
+    for f in 0..f0 {
+        let mut t = [0u32; 3];
+        for v in &mut t {
+            *v = b.get(width_for(n0 as u64)).map_err(cut)? as u32;
+        }
+        if let Some(&bad) = t.iter().find(|&&v| v as usize >= n0) {
+            return Err(MeshError::parse(path, format!("base face {f}"), format!("vertex {bad} out of range")));
+        }
+        triangles.push(t);
+    }
+    let positions: Vec<[f32; 3]> = at.iter().map(|q| grid.value(q)).collect();
+    let base = Mesh { positions, triangles, corners: Default::default() };
+    base.check().map_err(|e| MeshError::parse(path, "base mesh", e.to_string()))?;
+    Ok((at, base))
 }
 
 /// A corner not given its value yet.
@@ -557,6 +571,71 @@ fn on_grid<'q>(rest: &mut &'q [i64], n: usize, bits: u8) -> Option<&'q [i64]> {
 /// (texture coordinates, colours, second texture coordinates).
 pub(super) type DecodedAttributes = (PmAttributes, u8, Option<Grid<2>>, Option<Grid<4>>, Option<Grid<2>>);
 
+/// The value table's entries (grid integers, in the order `layout` gives) as the values they
+/// stand for, each checked against its grid: normal bits, texture coordinate, colour and second
+/// texture coordinate grids in `grids`.
+fn table_values(
+    table: &[Vec<i64>],
+    layout: &Layout,
+    uv_origin_top: bool,
+    (normal_bits, uvs, colors, uvs1): (u8, Option<&Grid<2>>, Option<&Grid<4>>, Option<&Grid<2>>),
+    path: &std::path::Path,
+) -> Result<CornerAttributes, MeshError> {
+    let mut values = CornerAttributes {
+        normals: layout.normal.then(Vec::new),
+        uvs: layout.uv.then(Vec::new),
+        colors: layout.color.then(Vec::new),
+        uv_origin_top,
+        materials: layout.material.then(Vec::new),
+        joints: layout.skin.then(Vec::new),
+        weights: layout.skin.then(Vec::new),
+        tangents: layout.tangent.then(Vec::new),
+        uvs1: layout.uv1.then(Vec::new),
+        library: None,
+    };
+    for (t, q) in table.iter().enumerate() {
+        let bad = |what: &str| MeshError::parse(path, format!("attribute value {t}"), format!("{what} off its grid"));
+        let mut rest = &q[..];
+        if let Some(n) = &mut values.normals {
+            n.push(from_octahedral(on_grid(&mut rest, 2, normal_bits).ok_or_else(|| bad("normal"))?, normal_bits));
+        }
+        if let (Some(u), Some(g)) = (&mut values.uvs, uvs) {
+            u.push(g.value(on_grid(&mut rest, 2, g.bits).ok_or_else(|| bad("texture coordinate"))?));
+        }
+        if let (Some(c), Some(g)) = (&mut values.colors, colors) {
+            c.push(g.value(on_grid(&mut rest, 4, g.bits).ok_or_else(|| bad("colour"))?));
+        }
+        if let Some(m) = &mut values.materials {
+            let material = match rest[0] {
+                -1 => NO_MATERIAL,
+                m if (0..NO_MATERIAL as i64).contains(&m) => m as u32,
+                m => return Err(MeshError::parse(path, format!("attribute value {t}"), format!("material {m}"))),
+            };
+            m.push(material);
+            rest = &rest[1..];
+        }
+        if let (Some(j), Some(w)) = (&mut values.joints, &mut values.weights) {
+            let joints: Option<Vec<u16>> = rest[..4].iter().map(|&c| u16::try_from(c).ok()).collect();
+            let Some(joints) = joints else { return Err(bad("joint")) };
+            let weights = on_grid(&mut &rest[4..8], 4, 8).ok_or_else(|| bad("weight"))?;
+            j.push([joints[0], joints[1], joints[2], joints[3]]);
+            w.push(std::array::from_fn(|k| weights[k] as f32 / 255.0));
+            rest = &rest[8..];
+        }
+        if let Some(tangents) = &mut values.tangents {
+            let direction =
+                from_octahedral(on_grid(&mut rest, 2, normal_bits).ok_or_else(|| bad("tangent"))?, normal_bits);
+            let handedness = on_grid(&mut rest, 1, 1).ok_or_else(|| bad("tangent handedness"))?[0];
+            let [x, y, z] = direction;
+            tangents.push([x, y, z, if handedness == 1 { -1.0 } else { 1.0 }]);
+        }
+        if let (Some(u), Some(g)) = (&mut values.uvs1, uvs1) {
+            u.push(g.value(on_grid(&mut rest, 2, g.bits).ok_or_else(|| bad("second texture coordinate"))?));
+        }
+    }
+    Ok(values)
+}
+
 /// Reads what [`encode_attributes`] wrote, replaying the splits of `pm` (already read).
 pub(super) fn decode_attributes(r: &mut Reader, pm: &ProgressiveMesh) -> Result<DecodedAttributes, MeshError> {
     let mask = r.take(1)?[0];
@@ -631,57 +710,7 @@ pub(super) fn decode_attributes(r: &mut Reader, pm: &ProgressiveMesh) -> Result<
     if !b.at_end() {
         return Err(MeshError::parse(path, format!("byte {start}"), "unexpected bits after the last attribute"));
     }
-    let mut values = CornerAttributes {
-        normals: layout.normal.then(Vec::new),
-        uvs: layout.uv.then(Vec::new),
-        colors: layout.color.then(Vec::new),
-        uv_origin_top: mask & ATTRIBUTE_UV_ORIGIN_TOP != 0,
-        materials: layout.material.then(Vec::new),
-        joints: layout.skin.then(Vec::new),
-        weights: layout.skin.then(Vec::new),
-        tangents: layout.tangent.then(Vec::new),
-        uvs1: layout.uv1.then(Vec::new),
-        library: None,
-    };
-    for (t, q) in state.table.iter().enumerate() {
-        let bad = |what: &str| MeshError::parse(path, format!("attribute value {t}"), format!("{what} off its grid"));
-        let mut rest = &q[..];
-        if let Some(n) = &mut values.normals {
-            n.push(from_octahedral(on_grid(&mut rest, 2, normal_bits).ok_or_else(|| bad("normal"))?, normal_bits));
-        }
-        if let (Some(u), Some(g)) = (&mut values.uvs, &uvs) {
-            u.push(g.value(on_grid(&mut rest, 2, g.bits).ok_or_else(|| bad("texture coordinate"))?));
-        }
-        if let (Some(c), Some(g)) = (&mut values.colors, &colors) {
-            c.push(g.value(on_grid(&mut rest, 4, g.bits).ok_or_else(|| bad("colour"))?));
-        }
-        if let Some(m) = &mut values.materials {
-            let material = match rest[0] {
-                -1 => NO_MATERIAL,
-                m if (0..NO_MATERIAL as i64).contains(&m) => m as u32,
-                m => return Err(MeshError::parse(path, format!("attribute value {t}"), format!("material {m}"))),
-            };
-            m.push(material);
-            rest = &rest[1..];
-        }
-        if let (Some(j), Some(w)) = (&mut values.joints, &mut values.weights) {
-            let joints: Option<Vec<u16>> = rest[..4].iter().map(|&c| u16::try_from(c).ok()).collect();
-            let Some(joints) = joints else { return Err(bad("joint")) };
-            let weights = on_grid(&mut &rest[4..8], 4, 8).ok_or_else(|| bad("weight"))?;
-            j.push([joints[0], joints[1], joints[2], joints[3]]);
-            w.push(std::array::from_fn(|k| weights[k] as f32 / 255.0));
-            rest = &rest[8..];
-        }
-        if let Some(tangents) = &mut values.tangents {
-            let direction =
-                from_octahedral(on_grid(&mut rest, 2, normal_bits).ok_or_else(|| bad("tangent"))?, normal_bits);
-            let handedness = on_grid(&mut rest, 1, 1).ok_or_else(|| bad("tangent handedness"))?[0];
-            let [x, y, z] = direction;
-            tangents.push([x, y, z, if handedness == 1 { -1.0 } else { 1.0 }]);
-        }
-        if let (Some(u), Some(g)) = (&mut values.uvs1, &uvs1) {
-            u.push(g.value(on_grid(&mut rest, 2, g.bits).ok_or_else(|| bad("second texture coordinate"))?));
-        }
-    }
+    let grids = (normal_bits, uvs.as_ref(), colors.as_ref(), uvs1.as_ref());
+    let values = table_values(&state.table, &layout, mask & ATTRIBUTE_UV_ORIGIN_TOP != 0, grids, path)?;
     Ok((PmAttributes { values, base: base_corners, splits }, normal_bits, uvs, colors, uvs1))
 }

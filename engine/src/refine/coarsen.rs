@@ -90,6 +90,39 @@ impl RingCache {
     }
 }
 
+/// The triangle collapse of face `t`: its cheapest legal edge (step 1), then, while more than
+/// `target_faces` of the `faces_alive` remain, its third vertex merged into the survivor at the
+/// optimum of the three quadrics (step 2). The survivor, the faces removed and the collapses made;
+/// `None` when no edge of the face may collapse.
+fn collapse_triangle(
+    state: &mut State,
+    t: [u32; 3],
+    faces_alive: usize,
+    target_faces: usize,
+) -> Option<(u32, usize, usize)> {
+    let mut candidates: Vec<_> =
+        [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])].iter().filter_map(|&(x, y)| state.evaluate(x, y)).collect();
+    candidates.sort_by(|x, y| x.cost.total_cmp(&y.cost));
+    let first = candidates.into_iter().find_map(|c| state.is_legal(&c).ok())?;
+    let (kept, gone) = (first.candidate().survivor, first.candidate().removed);
+    let third = *t.iter().find(|&&v| v != kept && v != gone).expect("three");
+    let faces_of = |r: &crate::pm::CollapseRecord| (r.left_face != u32::MAX) as usize + (r.right_face != u32::MAX) as usize;
+    let mut removed = faces_of(&state.collapse(first));
+    let mut collapses = 1;
+    let mut survivor = kept;
+    if faces_alive - removed > target_faces
+        && state.is_vertex_alive(third)
+        && let Some(second) = state.evaluate(survivor.min(third), survivor.max(third))
+        && let Ok(second) = state.is_legal(&second)
+    {
+        let next = second.candidate().survivor;
+        removed += faces_of(&state.collapse(second));
+        collapses += 1;
+        survivor = next;
+    }
+    Some((survivor, removed, collapses))
+}
+
 /// Collapses faces in increasing energy while their energy is below `threshold` (absolute) and
 /// more than `target_faces` faces remain.
 pub(crate) fn coarsen(
@@ -165,29 +198,11 @@ pub(crate) fn coarsen(
         {
             continue;
         }
-        // Step 1: the cheapest legal edge of the triangle.
-        let mut candidates: Vec<_> =
-            [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])].iter().filter_map(|&(x, y)| state.evaluate(x, y)).collect();
-        candidates.sort_by(|x, y| x.cost.total_cmp(&y.cost));
-        let Some(first) = candidates.into_iter().find_map(|c| state.is_legal(&c).ok()) else { continue };
-        let (kept, gone) = (first.candidate().survivor, first.candidate().removed);
-        let third = *t.iter().find(|&&v| v != kept && v != gone).expect("three");
-        let record = state.collapse(first);
-        faces_alive -= (record.left_face != u32::MAX) as usize + (record.right_face != u32::MAX) as usize;
-        collapses += 1;
-        let mut survivor = kept;
-        // Step 2: merge the third vertex at the optimum of all three quadrics.
-        if faces_alive > target_faces
-            && state.is_vertex_alive(third)
-            && let Some(second) = state.evaluate(survivor.min(third), survivor.max(third))
-            && let Ok(second) = state.is_legal(&second)
-        {
-            let next = second.candidate().survivor;
-            let record = state.collapse(second);
-            faces_alive -= (record.left_face != u32::MAX) as usize + (record.right_face != u32::MAX) as usize;
-            collapses += 1;
-            survivor = next;
-        }
+        let Some((survivor, removed, steps)) = collapse_triangle(&mut state, t, faces_alive, target_faces) else {
+            continue;
+        };
+        faces_alive -= removed;
+        collapses += steps;
         // Local energy update: mean lengths of the survivor and its ring, energies of the 2-ring.
         rings.clear();
         let ring1 = rings.ring(&state, survivor);

@@ -235,23 +235,7 @@ pub fn refine(mesh: &Mesh, options: &RefineOptions) -> Result<Refined, MeshError
     if prepared.triangles.is_empty() {
         return Err(MeshError::Empty { what: "no faces" });
     }
-    if options.rounds == 0 || options.rounds > MAX_ROUNDS {
-        return Err(MeshError::InvalidParameter {
-            name: "rounds",
-            reason: format!("{} is outside 1..={MAX_ROUNDS}", options.rounds),
-        });
-    }
-    if let Some(etc) = options.etc
-        && (etc.is_nan() || etc < 0.0)
-    {
-        return Err(MeshError::InvalidParameter { name: "etc", reason: format!("{etc} must be ≥ 0") });
-    }
-    if options.etc.is_none() && options.target_faces.is_none() {
-        return Err(MeshError::InvalidParameter { name: "etc", reason: "give an ETC or a target face count".into() });
-    }
-    if options.target_faces == Some(0) {
-        return Err(MeshError::InvalidParameter { name: "target_faces", reason: "target must be at least 1".into() });
-    }
+    check_options(options)?;
     check_fans(&prepared)?;
     let faces_in = prepared.face_count();
     // Every face of the output exists in memory: refuse targets whose ETC search could not end.
@@ -330,6 +314,29 @@ pub fn refine(mesh: &Mesh, options: &RefineOptions) -> Result<Refined, MeshError
         seconds: started.elapsed().as_secs_f64(),
     };
     Ok(Refined { mesh: mesh_out, stats })
+}
+
+/// The options' own checks, before any work: rounds in range, an ETC or a target, a target of at
+/// least one face.
+fn check_options(options: &RefineOptions) -> Result<(), MeshError> {
+    if options.rounds == 0 || options.rounds > MAX_ROUNDS {
+        return Err(MeshError::InvalidParameter {
+            name: "rounds",
+            reason: format!("{} is outside 1..={MAX_ROUNDS}", options.rounds),
+        });
+    }
+    if let Some(etc) = options.etc
+        && (etc.is_nan() || etc < 0.0)
+    {
+        return Err(MeshError::InvalidParameter { name: "etc", reason: format!("{etc} must be ≥ 0") });
+    }
+    if options.etc.is_none() && options.target_faces.is_none() {
+        return Err(MeshError::InvalidParameter { name: "etc", reason: "give an ETC or a target face count".into() });
+    }
+    if options.target_faces == Some(0) {
+        return Err(MeshError::InvalidParameter { name: "target_faces", reason: "target must be at least 1".into() });
+    }
+    Ok(())
 }
 
 /// Bisection on ETC (face count falls as ETC rises) for multi-round subdivision.

@@ -196,60 +196,8 @@ pub(super) fn simplify(
     // memory goes back before the second stage.)
     (h0.mesh, h1.mesh) = (Mesh::default(), Mesh::default());
     let n = prepared.vertex_count();
-    let (rest, whole_vertex, rest_vertex, whole_face, (mut state, edges)) = {
-        let halves = [(&h0, &st0), (&h1, &st1)];
-        // What is left: the live vertices and faces of both halves, in the whole mesh's order.
-        let mut place = vec![(u8::MAX, NONE); n]; // (half, its number there) of each vertex
-        for (s, (half, state)) in halves.iter().enumerate() {
-            for (i, &v) in half.vertices.iter().enumerate() {
-                if state.topo.vertex_alive[i] && !state.topo.fans[i].is_empty() && place[v as usize].0 == u8::MAX {
-                    place[v as usize] = (s as u8, i as u32);
-                }
-            }
-        }
-        let mut rest_vertex = vec![NONE; n];
-        let mut whole_vertex = Vec::new();
-        for v in 0..n {
-            if place[v].0 != u8::MAX {
-                rest_vertex[v] = whole_vertex.len() as u32;
-                whole_vertex.push(v as u32);
-            }
-        }
-        let block = |v: u32| {
-            let (s, i) = place[v as usize];
-            &halves[s as usize].1.vertices[i as usize]
-        };
-        let mut faces: Vec<(u32, [u32; 3])> = Vec::new();
-        for (half, state) in halves {
-            faces.extend(
-                (0..half.faces.len())
-                    .filter(|&f| state.topo.face_alive[f])
-                    .map(|f| (half.faces[f], state.topo.triangles[f].map(|v| half.vertices[v as usize]))),
-            );
-        }
-        faces.sort_unstable_by_key(|f| f.0);
-        let rest = Mesh {
-            positions: whole_vertex.iter().map(|&v| block(v).position).collect(),
-            triangles: faces.iter().map(|(_, t)| t.map(|v| rest_vertex[v as usize])).collect(),
-            corners: Default::default(),
-        };
-        let whole_face: Vec<u32> = faces.iter().map(|f| f.0).collect();
-        drop(faces);
-        // The second stage: off the cut, a vertex keeps its class, quadric and normal from its half.
-        let carry = |i: usize, vertex: &mut super::vertex::VertexData| {
-            let v = whole_vertex[i];
-            if !on_cut[v as usize] {
-                let from = block(v);
-                if from.kind != VertexKind::Locked {
-                    vertex.kind = from.kind;
-                }
-                vertex.quadric = from.quadric;
-                vertex.normal = from.normal;
-            }
-        };
-        let state = State::with_carried(&rest, options, false, Some(carry));
-        (rest, whole_vertex, rest_vertex, whole_face, state)
-    };
+    let (rest, whole_vertex, rest_vertex, whole_face, (mut state, edges)) =
+        rest_of(n, [(&h0, &st0), (&h1, &st1)], &on_cut, options);
     drop((st0, st1));
     if !state.stacked_faces(&rest).is_empty() {
         return Ok(None);
@@ -267,24 +215,7 @@ pub(super) fn simplify(
     let holes_closed =
         [&run0.log, &run1.log, &run2.log].iter().flat_map(|l| l.iter()).filter(|r| r.hole != NO_VERTEX).count();
     let progressive = options.record_progressive.then(|| {
-        // The halves' records interleaved by their error (rising within each), then the second
-        // stage's, all in the whole mesh's numbers.
-        let mut log = Vec::with_capacity(collapses);
-        let (mut i, mut j) = (0, 0);
-        let (l0, l1) = (&run0.log, &run1.log);
-        while i < l0.len() || j < l1.len() {
-            if j == l1.len() || (i < l0.len() && l0[i].error <= l1[j].error) {
-                log.push(renumber(&l0[i], &h0.vertices, &h0.faces));
-                i += 1;
-            } else {
-                log.push(renumber(&l1[j], &h1.vertices, &h1.faces));
-                j += 1;
-            }
-        }
-        log.extend(run2.log.iter().map(|r| {
-            let r = renumber(r, &whole_vertex, &whole_face);
-            CollapseRecord { error: r.error.max(first_error as f32), ..r }
-        }));
+        let log = merged_log([(&run0, &h0), (&run1, &h1)], &run2, (&whole_vertex, &whole_face), first_error);
         let triangles: Vec<[u32; 3]> =
             state.topo.triangles.iter().map(|t| t.map(|v| whole_vertex[v as usize])).collect();
         ProgressiveMesh::from_log(
@@ -312,6 +243,99 @@ pub(super) fn simplify(
         halves: true,
         distance_term: state.terms.fan_term,
     }))
+}
+
+/// What the two halves left, as one mesh for the second stage: their live vertices and faces in
+/// the whole mesh's order (`n` vertices), with the numbers of its vertices in the whole mesh, of
+/// the whole mesh's vertices in it, and of its faces in the whole mesh; and its state, in which a
+/// vertex off the cut (`on_cut`) keeps its class, quadric and normal from its half.
+#[allow(clippy::type_complexity)]
+fn rest_of<'o>(
+    n: usize,
+    halves: [(&Half, &State); 2],
+    on_cut: &[bool],
+    options: &'o SimplifyOptions,
+) -> (Mesh, Vec<u32>, Vec<u32>, Vec<u32>, (State<'o>, Vec<[u32; 2]>)) {
+    // What is left: the live vertices and faces of both halves, in the whole mesh's order.
+    let mut place = vec![(u8::MAX, NONE); n]; // (half, its number there) of each vertex
+    for (s, (half, state)) in halves.iter().enumerate() {
+        for (i, &v) in half.vertices.iter().enumerate() {
+            if state.topo.vertex_alive[i] && !state.topo.fans[i].is_empty() && place[v as usize].0 == u8::MAX {
+                place[v as usize] = (s as u8, i as u32);
+            }
+        }
+    }
+    let mut rest_vertex = vec![NONE; n];
+    let mut whole_vertex = Vec::new();
+    for v in 0..n {
+        if place[v].0 != u8::MAX {
+            rest_vertex[v] = whole_vertex.len() as u32;
+            whole_vertex.push(v as u32);
+        }
+    }
+    let block = |v: u32| {
+        let (s, i) = place[v as usize];
+        &halves[s as usize].1.vertices[i as usize]
+    };
+    let mut faces: Vec<(u32, [u32; 3])> = Vec::new();
+    for (half, state) in halves {
+        faces.extend(
+            (0..half.faces.len())
+                .filter(|&f| state.topo.face_alive[f])
+                .map(|f| (half.faces[f], state.topo.triangles[f].map(|v| half.vertices[v as usize]))),
+        );
+    }
+    faces.sort_unstable_by_key(|f| f.0);
+    let rest = Mesh {
+        positions: whole_vertex.iter().map(|&v| block(v).position).collect(),
+        triangles: faces.iter().map(|(_, t)| t.map(|v| rest_vertex[v as usize])).collect(),
+        corners: Default::default(),
+    };
+    let whole_face: Vec<u32> = faces.iter().map(|f| f.0).collect();
+    drop(faces);
+    // The second stage: off the cut, a vertex keeps its class, quadric and normal from its half.
+    let carry = |i: usize, vertex: &mut super::vertex::VertexData| {
+        let v = whole_vertex[i];
+        if !on_cut[v as usize] {
+            let from = block(v);
+            if from.kind != VertexKind::Locked {
+                vertex.kind = from.kind;
+            }
+            vertex.quadric = from.quadric;
+            vertex.normal = from.normal;
+        }
+    };
+    let state = State::with_carried(&rest, options, false, Some(carry));
+    (rest, whole_vertex, rest_vertex, whole_face, state)
+}
+
+/// The halves' records interleaved by their error (rising within each), then the second stage's
+/// (in the numbers of the rest: `whole`, its vertices' and faces' numbers in the whole mesh), all
+/// in the whole mesh's numbers; the second stage's errors no lower than the halves' largest.
+fn merged_log(
+    halves: [(&Run, &Half); 2],
+    second: &Run,
+    (whole_vertex, whole_face): (&[u32], &[u32]),
+    first_error: f64,
+) -> Vec<CollapseRecord> {
+    let [(run0, h0), (run1, h1)] = halves;
+    let mut log = Vec::with_capacity(run0.log.len() + run1.log.len() + second.log.len());
+    let (mut i, mut j) = (0, 0);
+    let (l0, l1) = (&run0.log, &run1.log);
+    while i < l0.len() || j < l1.len() {
+        if j == l1.len() || (i < l0.len() && l0[i].error <= l1[j].error) {
+            log.push(renumber(&l0[i], &h0.vertices, &h0.faces));
+            i += 1;
+        } else {
+            log.push(renumber(&l1[j], &h1.vertices, &h1.faces));
+            j += 1;
+        }
+    }
+    log.extend(second.log.iter().map(|r| {
+        let r = renumber(r, whole_vertex, whole_face);
+        CollapseRecord { error: r.error.max(first_error as f32), ..r }
+    }));
+    log
 }
 
 #[cfg(test)]

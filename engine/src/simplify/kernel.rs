@@ -411,24 +411,7 @@ impl<'o> State<'o> {
             collapsed_position: c.position,
             error: 0.0,
         };
-        let mut dead = [NONE; 2];
-        for (slot, corner) in dead.iter_mut().zip(&shared[..shared_count]) {
-            let (f, third) = (corner.face, corner.other(b));
-            // The face with half-edge a→b is the left face of the split (vs = a, vt = b).
-            if corner.next == b {
-                record.left = third;
-                record.left_face = f;
-            } else {
-                record.right = third;
-                record.right_face = f;
-            }
-            self.topo.face_alive[f as usize] = false;
-            *slot = f;
-            let fan = &mut self.topo.fans[third as usize];
-            if let Some(i) = fan.find_face(f) {
-                fan.remove(i);
-            }
-        }
+        let dead = self.topo.remove_edge_faces(b, &shared[..shared_count], &mut record);
         // Rule 7's mapping of b's values to a's (checked legal: `is_legal` refused it otherwise).
         let sides = if self.seams.corner_source.is_empty() {
             None

@@ -49,38 +49,8 @@ impl State<'_> {
                 return Err(Refusal::UvFlip);
             }
         }
-        // Rule 3, link condition: the common neighbours of the edge's ends are exactly the
-        // opposite vertices of its faces, or those and the third corner of a triangular hole that
-        // the collapse closes.
         let opposite = [shared[0].other(b), if shared_count == 2 { shared[1].other(b) } else { NONE }];
-        let stamp = self.next_stamp();
-        for corner in &self.topo.fans[a as usize] {
-            self.scratch.mark[corner.next as usize] = stamp;
-            self.scratch.mark[corner.prev as usize] = stamp;
-        }
-        // Counted without a branch on the data (whether a neighbour of b is one of a's is as good
-        // as random): each common neighbour once, and those not opposite the edge (the last one).
-        let mut common = 0;
-        let mut strays = 0;
-        let mut stray = NONE;
-        for corner in &self.topo.fans[b as usize] {
-            for v in [corner.next, corner.prev] {
-                let mark = &mut self.scratch.mark[v as usize];
-                let hit = (v != a) & (*mark == stamp);
-                *mark = if hit { stamp.wrapping_sub(1) } else { *mark }; // count each neighbour once
-                let off_edge = hit & (v != opposite[0]) & (v != opposite[1]);
-                strays += off_edge as usize;
-                stray = if off_edge { v } else { stray };
-                common += hit as usize;
-            }
-        }
-        let hole = if strays == 0 && common == shared_count {
-            NONE
-        } else if strays == 1 && common == 2 && shared_count == 1 && self.closes_hole(a, b, stray, shared[0]) {
-            stray
-        } else {
-            return Err(Refusal::Link);
-        };
+        let hole = self.link_condition(a, b, opposite, shared[0], shared_count)?;
         // Rule 1 for a frozen survivor (non-manifold or inconsistently oriented around it): its
         // edges to the opposite vertices each have exactly one face besides the collapsing one,
         // which crosses the edge the other way, so that the faces b brings attach to one sheet,
@@ -134,29 +104,54 @@ impl State<'_> {
                 fan.push(([x, y], n_new));
             }
         }
-        // Rule 6, pairwise: two faces of the new fan that share an edge must not turn back onto each other
-        // (a sequence of small per-face normal changes can otherwise fold a pair over). The link
-        // condition holds, so the new fan is a disk (or half of one) in which the spoke (merged
-        // vertex, x) is the `x` of one face and the `y` of the next: each face finds the face it
-        // follows through `spoke`, indexed by vertex, in one pass without a data-dependent branch
-        // (checking all pairs cost a mispredicted branch per shared edge). A `spoke` entry left by
-        // an earlier check is told apart by the face it names not having that `x`.
-        for (i, &([x, _], _)) in fan.iter().enumerate() {
-            self.scratch.spoke[x as usize] = i as u32;
-        }
-        let mut folded = false;
-        for &([_, y], n) in fan.iter() {
-            let before = fan.get(self.scratch.spoke[y as usize] as usize);
-            folded |= before.is_some_and(|&([x, _], m)| (x == y) & (m.dot(n) < FOLD_DOT));
-        }
-        // Around a frozen survivor the new fan need not be a disk: every pair is looked at.
-        let folded = if frozen { folds_pairwise(&fan) } else { folded };
-        debug_assert!(frozen || folded == folds_pairwise(&fan), "spoke pairing disagrees with the pairwise check");
+        let folded = new_fan_folds(&mut self.scratch.spoke, &fan, frozen);
         self.scratch.fan_scratch = fan;
         if folded {
             return Err(Refusal::Fold);
         }
         Ok(Legal { candidate: *c, check: self.scratch.check_id, hole })
+    }
+
+    /// Rule 3, link condition: the common neighbours of the edge's ends are exactly the
+    /// `opposite` vertices of its faces (`first` one of them, `shared_count` in all), or those and
+    /// the third corner of a triangular hole that the collapse closes: that corner, or [`NONE`].
+    #[inline]
+    fn link_condition(
+        &mut self,
+        a: u32,
+        b: u32,
+        opposite: [u32; 2],
+        first: Corner,
+        shared_count: usize,
+    ) -> Result<u32, Refusal> {
+        let stamp = self.next_stamp();
+        for corner in &self.topo.fans[a as usize] {
+            self.scratch.mark[corner.next as usize] = stamp;
+            self.scratch.mark[corner.prev as usize] = stamp;
+        }
+        // Counted without a branch on the data (whether a neighbour of b is one of a's is as good
+        // as random): each common neighbour once, and those not opposite the edge (the last one).
+        let mut common = 0;
+        let mut strays = 0;
+        let mut stray = NONE;
+        for corner in &self.topo.fans[b as usize] {
+            for v in [corner.next, corner.prev] {
+                let mark = &mut self.scratch.mark[v as usize];
+                let hit = (v != a) & (*mark == stamp);
+                *mark = if hit { stamp.wrapping_sub(1) } else { *mark }; // count each neighbour once
+                let off_edge = hit & (v != opposite[0]) & (v != opposite[1]);
+                strays += off_edge as usize;
+                stray = if off_edge { v } else { stray };
+                common += hit as usize;
+            }
+        }
+        if strays == 0 && common == shared_count {
+            Ok(NONE)
+        } else if strays == 1 && common == 2 && shared_count == 1 && self.closes_hole(a, b, stray, first) {
+            Ok(stray)
+        } else {
+            Err(Refusal::Link)
+        }
     }
 
     /// Whether edge (a, v) has, besides the face it shares with b, exactly one face, crossing the
@@ -296,6 +291,31 @@ impl State<'_> {
         self.vertices[v as usize].kind = if closed { VertexKind::Interior } else { VertexKind::Boundary };
         true
     }
+}
+
+/// Rule 6, pairwise, over the new fan (far edge, unit normal of each face): whether two faces
+/// that share an edge turn back onto each other. `spoke`: scratch indexed by vertex.
+#[inline]
+fn new_fan_folds(spoke: &mut [u32], fan: &[([u32; 2], DVec3)], frozen: bool) -> bool {
+    // Rule 6, pairwise: two faces of the new fan that share an edge must not turn back onto each other
+    // (a sequence of small per-face normal changes can otherwise fold a pair over). The link
+    // condition holds, so the new fan is a disk (or half of one) in which the spoke (merged
+    // vertex, x) is the `x` of one face and the `y` of the next: each face finds the face it
+    // follows through `spoke`, indexed by vertex, in one pass without a data-dependent branch
+    // (checking all pairs cost a mispredicted branch per shared edge). A `spoke` entry left by
+    // an earlier check is told apart by the face it names not having that `x`.
+    for (i, &([x, _], _)) in fan.iter().enumerate() {
+        spoke[x as usize] = i as u32;
+    }
+    let mut folded = false;
+    for &([_, y], n) in fan.iter() {
+        let before = fan.get(spoke[y as usize] as usize);
+        folded |= before.is_some_and(|&([x, _], m)| (x == y) & (m.dot(n) < FOLD_DOT));
+    }
+    // Around a frozen survivor the new fan need not be a disk: every pair is looked at.
+    let folded = if frozen { folds_pairwise(fan) } else { folded };
+    debug_assert!(frozen || folded == folds_pairwise(fan), "spoke pairing disagrees with the pairwise check");
+    folded
 }
 
 #[cfg(test)]

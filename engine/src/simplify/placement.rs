@@ -35,44 +35,7 @@ impl State<'_> {
     pub(super) fn choose(&self, a: u32, b: u32) -> Option<Choice> {
         let (va, vb) = (&self.vertices[a as usize], &self.vertices[b as usize]);
         let (ka, kb) = (va.kind, vb.kind);
-        let lock = self.config.options.boundary == BoundaryMode::Lock;
-        // A frozen vertex stays where it is, as an anchor does, and takes in a neighbour only
-        // where its own edges to the collapse's opposite vertices are manifold (rule 1, checked
-        // with the link condition in `is_legal`).
-        let stays = |k: VertexKind| matches!(k, VertexKind::Anchored | VertexKind::Frozen);
-        // Which endpoints may survive, and whether the survivor may move.
-        let (may_keep_a, may_keep_b, may_move) = match (ka, kb) {
-            _ if stays(ka) && stays(kb) => return None,
-            (VertexKind::Locked, _) | (_, VertexKind::Locked) => return None,
-            // A boundary vertex goes into an anchor only along its boundary.
-            (_, VertexKind::Boundary) | (VertexKind::Boundary, _)
-                if (stays(ka) || stays(kb)) && self.edge_corners(a, b).1 != 1 =>
-            {
-                return None;
-            }
-            _ if stays(ka) => (true, false, false),
-            _ if stays(kb) => (false, true, false),
-            (VertexKind::Boundary, VertexKind::Boundary) => {
-                if lock || self.edge_corners(a, b).1 != 1 {
-                    return None; // interior edge joining two boundary points, or locked border
-                }
-                (true, true, true)
-            }
-            (VertexKind::Boundary, _) => (true, false, false),
-            (_, VertexKind::Boundary) => (false, true, false),
-            _ => (true, true, true),
-        };
-        // With attributes, an edge with one end on a seam keeps that end where it is (rule 7).
-        let (may_keep_a, may_keep_b, may_move) = if self.seams.on_seam.is_empty() {
-            (may_keep_a, may_keep_b, may_move)
-        } else {
-            match (self.seams.on_seam[a as usize], self.seams.on_seam[b as usize]) {
-                (true, false) if may_keep_a => (true, false, false),
-                (false, true) if may_keep_b => (false, true, false),
-                (true, false) | (false, true) => return None,
-                _ => (may_keep_a, may_keep_b, may_move),
-            }
-        };
+        let (may_keep_a, may_keep_b, may_move) = self.allowed(a, b, ka, kb)?;
         let (pa, pb) = (to_f64(va.position), to_f64(vb.position));
         let quadric_cost = matches!(self.config.options.metric, Metric::Qem | Metric::Qfvp { .. });
         if quadric_cost
@@ -172,5 +135,48 @@ impl State<'_> {
             }
         }
         best
+    }
+
+    /// Which ends of edge {a, b} (of classes `ka`, `kb`) may survive its collapse, and whether the
+    /// survivor may move: `(keep a, keep b, move)`, or `None` when the rules forbid every way.
+    #[inline]
+    fn allowed(&self, a: u32, b: u32, ka: VertexKind, kb: VertexKind) -> Option<(bool, bool, bool)> {
+        let lock = self.config.options.boundary == BoundaryMode::Lock;
+        // A frozen vertex stays where it is, as an anchor does, and takes in a neighbour only
+        // where its own edges to the collapse's opposite vertices are manifold (rule 1, checked
+        // with the link condition in `is_legal`).
+        let stays = |k: VertexKind| matches!(k, VertexKind::Anchored | VertexKind::Frozen);
+        // Which endpoints may survive, and whether the survivor may move.
+        let (may_keep_a, may_keep_b, may_move) = match (ka, kb) {
+            _ if stays(ka) && stays(kb) => return None,
+            (VertexKind::Locked, _) | (_, VertexKind::Locked) => return None,
+            // A boundary vertex goes into an anchor only along its boundary.
+            (_, VertexKind::Boundary) | (VertexKind::Boundary, _)
+                if (stays(ka) || stays(kb)) && self.edge_corners(a, b).1 != 1 =>
+            {
+                return None;
+            }
+            _ if stays(ka) => (true, false, false),
+            _ if stays(kb) => (false, true, false),
+            (VertexKind::Boundary, VertexKind::Boundary) => {
+                if lock || self.edge_corners(a, b).1 != 1 {
+                    return None; // interior edge joining two boundary points, or locked border
+                }
+                (true, true, true)
+            }
+            (VertexKind::Boundary, _) => (true, false, false),
+            (_, VertexKind::Boundary) => (false, true, false),
+            _ => (true, true, true),
+        };
+        // With attributes, an edge with one end on a seam keeps that end where it is (rule 7).
+        if self.seams.on_seam.is_empty() {
+            return Some((may_keep_a, may_keep_b, may_move));
+        }
+        match (self.seams.on_seam[a as usize], self.seams.on_seam[b as usize]) {
+            (true, false) if may_keep_a => Some((true, false, false)),
+            (false, true) if may_keep_b => Some((false, true, false)),
+            (true, false) | (false, true) => None,
+            _ => Some((may_keep_a, may_keep_b, may_move)),
+        }
     }
 }

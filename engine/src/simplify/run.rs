@@ -154,13 +154,7 @@ pub(super) fn run(
             // that a collapse came near after its last refusal (`retry`).
             passes += 1;
             collapses_this_pass = 0;
-            retry.prepare(state, &log);
-            for v in 0..vertex_count as u32 {
-                if state.topo.vertex_alive[v as usize] {
-                    neighbours.clear();
-                    state.push_edges_where(v, v + 1, &mut heap, &mut neighbours, |u| retry.needs(v, u));
-                }
-            }
+            queue_again(state, &mut retry, &log, &mut heap, &mut neighbours);
             continue;
         };
         let (a, b) = (entry.a(), entry.b & !GUARDED);
@@ -217,24 +211,7 @@ pub(super) fn run(
         let (opposite, hole) = ([record.left, record.right], record.hole);
         log.push(record);
         collapses_this_pass += 1;
-        // The survivor and the two opposite vertices lost faces: one whose faces now carry fewer
-        // sets of values may be held by fewer rules (`State::relax`), and its edges are ranked again.
-        let survivor = candidate.survivor;
-        if with_attributes {
-            state.relax(survivor);
-        }
-        state.push_edges_of(survivor, &mut heap, &mut neighbours);
-        // A closed hole's third corner is interior now: its edges rank by other rules.
-        if hole != NONE {
-            state.push_edges_where(hole, 0, &mut heap, &mut neighbours, |u| u != survivor);
-        }
-        if with_attributes {
-            for v in opposite {
-                if v != NONE && state.relax(v) {
-                    state.push_edges_where(v, 0, &mut heap, &mut neighbours, |u| u != survivor);
-                }
-            }
-        }
+        rank_again(state, candidate.survivor, opposite, hole, with_attributes, &mut heap, &mut neighbours);
         // The queue's refills drop the stale entries they pass over; where its heap takes most
         // pushes (refills then come seldom: fandisk's planar regions) they pile up instead. A mesh
         // has about 1.5 edges per face, so once the queue holds more than 2 entries per face a
@@ -245,6 +222,55 @@ pub(super) fn run(
     };
     let parts_removed = parts.map_or(0, |p| p.removed);
     Ok(Run { log, stop_reason, refused, max_collapse_error, parts_removed })
+}
+
+/// A new pass: queues again every edge that a collapse came near after its last refusal
+/// (`retry`), since refused candidates may have become legal.
+#[cold]
+fn queue_again(
+    state: &mut State,
+    retry: &mut Retry,
+    log: &[CollapseRecord],
+    heap: &mut TieredQueue,
+    neighbours: &mut Vec<u32>,
+) {
+    retry.prepare(state, log);
+    for v in 0..state.vertices.len() as u32 {
+        if state.topo.vertex_alive[v as usize] {
+            neighbours.clear();
+            state.push_edges_where(v, v + 1, heap, neighbours, |u| retry.needs(v, u));
+        }
+    }
+}
+
+/// After a collapse into `survivor`: its edges ranked again, and those of a closed hole's third
+/// corner (interior now: its edges rank by other rules). The survivor and the two `opposite`
+/// vertices lost faces: one whose faces now carry fewer sets of values may be held by fewer rules
+/// (`State::relax`), and its edges are ranked again too.
+#[inline]
+fn rank_again(
+    state: &mut State,
+    survivor: u32,
+    opposite: [u32; 2],
+    hole: u32,
+    with_attributes: bool,
+    heap: &mut TieredQueue,
+    neighbours: &mut Vec<u32>,
+) {
+    if with_attributes {
+        state.relax(survivor);
+    }
+    state.push_edges_of(survivor, heap, neighbours);
+    if hole != NONE {
+        state.push_edges_where(hole, 0, heap, neighbours, |u| u != survivor);
+    }
+    if with_attributes {
+        for v in opposite {
+            if v != NONE && state.relax(v) {
+                state.push_edges_where(v, 0, heap, neighbours, |u| u != survivor);
+            }
+        }
+    }
 }
 
 #[cfg(test)]

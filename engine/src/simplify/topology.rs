@@ -6,6 +6,8 @@ use crate::fan::{Corner, FanSlot};
 use crate::mesh::Mesh;
 use crate::pm::CollapseRecord;
 
+use super::vertex::NONE;
+
 /// The passes over the faces write to their corners' fans and blocks, in the input's vertex order,
 /// which can be far from its face order: each asks for the data of the face `AHEAD` places on
 /// while it works on this one.
@@ -28,6 +30,31 @@ pub(crate) struct Topology {
 }
 
 impl Topology {
+    /// Takes out the faces `shared` of the edge whose end `b` goes (as corners of the other end's
+    /// fan), each from its third corner's fan, and names them and their third corners in `record`:
+    /// the face with half-edge a→b is the split's left face (vs = a, vt = b). Returns the faces,
+    /// [`NONE`] for a missing second one.
+    pub(crate) fn remove_edge_faces(&mut self, b: u32, shared: &[Corner], record: &mut CollapseRecord) -> [u32; 2] {
+        let mut dead = [NONE; 2];
+        for (slot, corner) in dead.iter_mut().zip(shared) {
+            let (f, third) = (corner.face, corner.other(b));
+            if corner.next == b {
+                record.left = third;
+                record.left_face = f;
+            } else {
+                record.right = third;
+                record.right_face = f;
+            }
+            self.face_alive[f as usize] = false;
+            *slot = f;
+            let fan = &mut self.fans[third as usize];
+            if let Some(i) = fan.find_face(f) {
+                fan.remove(i);
+            }
+        }
+        dead
+    }
+
     /// The topology of `mesh` around `fans` (its fans, built by [`build_fans`]); `track` keeps the
     /// faces' corners current through the collapses.
     pub(crate) fn new(mesh: &Mesh, fans: Vec<FanSlot>, track: bool) -> Topology {
