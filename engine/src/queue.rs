@@ -50,7 +50,7 @@ impl QueueEntry {
 /// neighbourhood) would tie every such candidate; they go shortest edge first instead, the length's
 /// bits scaled into the subnormal range below every normal error. On planar regions this order
 /// refuses far fewer candidates than the ties' order in the heap did (shorter edges make fewer
-/// needles; docs/history/benchmarks-log.md, session 15), and it does not depend on how the queue is laid out.
+/// needles; docs/history/benchmarks-log.md), and it does not depend on how the queue is laid out.
 #[inline]
 pub(crate) fn order_key(cost: f64, error: f64, length2: f64) -> u32 {
     let bits = |x: f64| if x.is_nan() { f32::INFINITY.to_bits() } else { (x.max(0.0) as f32).to_bits() };
@@ -186,7 +186,7 @@ impl CollapseQueue {
 /// an evenly spaced sample). The pops come in the order of a single heap over every entry: each
 /// entry of the array ranks above each entry of the heap. Against one heap of every entry, with a
 /// sweep and a rebuild whenever a quarter of it was stale, it took less time, through fewer cache
-/// misses above all; other shares did no better (docs/history/benchmarks-log.md, session 15).
+/// misses above all; other shares did no better (docs/history/benchmarks-log.md).
 #[derive(Debug, Default)]
 pub(crate) struct TieredQueue {
     hot: CollapseQueue,

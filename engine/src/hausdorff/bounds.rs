@@ -354,37 +354,37 @@ fn face_piece(
     scratch: &mut Scratch,
     found: &mut Found,
 ) {
-        let t = a.triangles[f];
-        let mut piece = Piece {
-            corners: a.triangle_points(f),
-            distance: t.map(|v| at_vertex[v as usize].0),
-            slot: t.map(|v| at_vertex[v as usize].1),
-            best: [u32::MAX; 2],
-            upper: 0.0,
-            depth: 0,
-            sequence: f as u64,
-        };
-        (piece.upper, piece.best) = bound(b, &piece, &[], lower);
-        // First the cheap question: is the piece within the threshold? (A thin prism
-        // holds few of B's triangles.)
-        if piece.upper > start
-            && let Some(upper) = patch_bound(b, &piece.corners, start, None, scratch)
-        {
-            piece.upper = upper;
+    let t = a.triangles[f];
+    let mut piece = Piece {
+        corners: a.triangle_points(f),
+        distance: t.map(|v| at_vertex[v as usize].0),
+        slot: t.map(|v| at_vertex[v as usize].1),
+        best: [u32::MAX; 2],
+        upper: 0.0,
+        depth: 0,
+        sequence: f as u64,
+    };
+    (piece.upper, piece.best) = bound(b, &piece, &[], lower);
+    // First the cheap question: is the piece within the threshold? (A thin prism
+    // holds few of B's triangles.)
+    if piece.upper > start
+        && let Some(upper) = patch_bound(b, &piece.corners, start, None, scratch)
+    {
+        piece.upper = upper;
+    }
+    // If not, its centroid (which may raise L) and its bound at its own limit.
+    if piece.upper > start {
+        let centroid = (piece.corners[0] + piece.corners[1] + piece.corners[2]) / 3.0;
+        let (d, slot) = evaluate(b, centroid, piece.best[0]);
+        found.evaluations += 1;
+        found.lower = found.lower.max(d);
+        let (upper, best) = bound(b, &piece, &[slot, piece.best[0], piece.best[1]], lower);
+        if upper < piece.upper {
+            (piece.upper, piece.best) = (upper, best);
         }
-        // If not, its centroid (which may raise L) and its bound at its own limit.
-        if piece.upper > start {
-            let centroid = (piece.corners[0] + piece.corners[1] + piece.corners[2]) / 3.0;
-            let (d, slot) = evaluate(b, centroid, piece.best[0]);
-            found.evaluations += 1;
-            found.lower = found.lower.max(d);
-            let (upper, best) = bound(b, &piece, &[slot, piece.best[0], piece.best[1]], lower);
-            if upper < piece.upper {
-                (piece.upper, piece.best) = (upper, best);
-            }
-            tighten(b, &mut piece, start, None, scratch);
-        }
-        found.offer(piece, start);
+        tighten(b, &mut piece, start, None, scratch);
+    }
+    found.offer(piece, start);
 }
 
 /// Splits a piece 1 → 4 at its edge midpoints, each evaluated exactly.

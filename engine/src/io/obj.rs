@@ -85,26 +85,7 @@ pub fn read_obj(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadL
         let line = bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count() + 1;
         MeshError::parse(path, format!("line {line}"), "not valid UTF-8 text (binary file?)")
     })?;
-
-    let mut positions: Vec<[f32; 3]> = Vec::new();
-    let mut uvs: Vec<[f32; 2]> = Vec::new();
-    let mut normals: Vec<[f32; 3]> = Vec::new();
-    let mut triangles: Vec<[u32; 3]> = Vec::new();
-    let mut corner_uv: Vec<i64> = Vec::new();
-    let mut corner_normal: Vec<i64> = Vec::new();
-    let mut uv_corners = 0;
-    let mut all_have_normal = true;
-    // Line of each triangle, to name it when a forward reference turns out to be out of range.
-    let mut triangle_lines: Vec<u32> = Vec::new();
-    let mut polygon: Vec<Corner> = Vec::new();
-    let mut polygon_points: Vec<DVec3> = Vec::new();
-    let mut local_triangles: Vec<[usize; 3]> = Vec::new();
-    // `usemtl` names in order of first use, the one in force, and each triangle's.
-    let mut material_names: Vec<String> = Vec::new();
-    let mut material = NO_MATERIAL;
-    let mut triangle_materials: Vec<u32> = Vec::new();
-    let mut libraries: Vec<String> = Vec::new();
-
+    let mut obj = ObjReader::new(path, limits);
     for (line_index, raw_line) in text.lines().enumerate() {
         let line = line_index + 1;
         let mut tokens = raw_line.split_ascii_whitespace();
@@ -113,160 +94,221 @@ pub fn read_obj(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadL
         };
         match keyword {
             "v" => {
-                limits.check_vertices(positions.len() as u64 + 1, path)?;
-                positions.push(parse_floats::<3>(tokens, path, line, "vertex")?);
+                limits.check_vertices(obj.positions.len() as u64 + 1, path)?;
+                obj.positions.push(parse_floats::<3>(tokens, path, line, "vertex")?);
             }
-            "vt" => uvs.push(parse_floats::<2>(tokens, path, line, "texture coordinate")?),
-            "vn" => normals.push(parse_floats::<3>(tokens, path, line, "normal")?),
-            "f" | "fo" => {
-                polygon.clear();
-                for token in tokens {
-                    let mut parts = token.split('/');
-                    let position = resolve(parts.next().unwrap_or(""), positions.len(), path, line)?;
-                    let uv = match parts.next() {
-                        Some("") | None => None,
-                        Some(t) => Some(resolve(t, uvs.len(), path, line)?),
-                    };
-                    let normal = match parts.next() {
-                        Some("") | None => None,
-                        Some(t) => Some(resolve(t, normals.len(), path, line)?),
-                    };
-                    polygon.push(Corner { position, uv, normal });
-                }
-                if polygon.len() < 3 {
-                    return Err(MeshError::parse(
-                        path,
-                        format!("line {line}"),
-                        format!("face has {} corners; a face needs at least 3", polygon.len()),
-                    ));
-                }
-                if polygon.len() > super::options::MAX_POLYGON_CORNERS {
-                    return Err(MeshError::parse(
-                        path,
-                        format!("line {line}"),
-                        format!(
-                            "face has {} corners; at most {} are accepted",
-                            polygon.len(),
-                            super::options::MAX_POLYGON_CORNERS
-                        ),
-                    ));
-                }
-                // Checked before triangulating: n corners always make n − 2 triangles.
-                limits.check_faces((triangles.len() + polygon.len() - 2) as u64, path)?;
-                local_triangles.clear();
-                if polygon.len() == 3 {
-                    local_triangles.push([0, 1, 2]);
-                } else {
-                    // Positions of forward references are unknown yet; such polygons are fanned.
-                    let known = polygon.iter().all(|c| (c.position as usize) < positions.len());
-                    polygon_points.clear();
-                    polygon_points.extend(polygon.iter().map(|c| {
-                        if known {
-                            let p = positions[c.position as usize];
-                            DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
-                        } else {
-                            DVec3::ZERO
-                        }
-                    }));
-                    triangulate_polygon(&polygon_points, &mut local_triangles);
-                }
-                for t in &local_triangles {
-                    let mut tri = [0u32; 3];
-                    for (slot, &k) in tri.iter_mut().zip(t) {
-                        let c = polygon[k];
-                        *slot = u32::try_from(c.position).map_err(|_| {
-                            MeshError::parse(
-                                path,
-                                format!("line {line}"),
-                                format!("vertex index {} too large", c.position + 1),
-                            )
-                        })?;
-                        // (A corner without one is marked: see the texture coordinates below.)
-                        corner_uv.push(c.uv.unwrap_or(NO_VALUE));
-                        uv_corners += c.uv.is_some() as usize;
-                        match c.normal {
-                            Some(i) => corner_normal.push(i),
-                            None => all_have_normal = false,
-                        }
-                    }
-                    triangles.push(tri);
-                    triangle_lines.push(line as u32);
-                    triangle_materials.push(material);
-                }
-            }
-            "usemtl" => {
-                let name = raw_line.trim()["usemtl".len()..].trim().to_string();
-                material = match material_names.iter().position(|n| *n == name) {
-                    Some(i) => i as u32,
-                    None => {
-                        material_names.push(name);
-                        material_names.len() as u32 - 1
-                    }
-                };
-            }
-            "mtllib" => libraries.push(raw_line.trim()["mtllib".len()..].trim().to_string()),
+            "vt" => obj.uvs.push(parse_floats::<2>(tokens, path, line, "texture coordinate")?),
+            "vn" => obj.normals.push(parse_floats::<3>(tokens, path, line, "normal")?),
+            "f" | "fo" => obj.face(tokens, line)?,
+            "usemtl" => obj.use_material(raw_line.trim()["usemtl".len()..].trim()),
+            "mtllib" => obj.libraries.push(raw_line.trim()["mtllib".len()..].trim().to_string()),
             _ => {} // o, g, s, l, p, comments: not geometry we keep
         }
     }
+    obj.finish(folder)
+}
 
-    let vertex_count = positions.len();
-    for (t, tri) in triangles.iter().enumerate() {
-        if let Some(&i) = tri.iter().find(|&&i| i as usize >= vertex_count) {
-            return Err(MeshError::parse(
-                path,
-                format!("line {}", triangle_lines[t]),
-                format!("face refers to vertex {} but the file has {vertex_count} vertices", i as u64 + 1),
-            ));
+/// What an OBJ file has said so far, as [`read_obj`] reads it line by line.
+struct ObjReader<'a> {
+    path: &'a Path,
+    limits: &'a ReadLimits,
+    positions: Vec<[f32; 3]>,
+    uvs: Vec<[f32; 2]>,
+    normals: Vec<[f32; 3]>,
+    triangles: Vec<[u32; 3]>,
+    corner_uv: Vec<i64>,
+    corner_normal: Vec<i64>,
+    uv_corners: usize,
+    all_have_normal: bool,
+    /// Line of each triangle, to name it when a forward reference turns out to be out of range.
+    triangle_lines: Vec<u32>,
+    polygon: Vec<Corner>,
+    polygon_points: Vec<DVec3>,
+    local_triangles: Vec<[usize; 3]>,
+    /// `usemtl` names in order of first use, the one in force, and each triangle's.
+    material_names: Vec<String>,
+    material: u32,
+    triangle_materials: Vec<u32>,
+    libraries: Vec<String>,
+}
+
+impl<'a> ObjReader<'a> {
+    /// Nothing read yet of the file `path`.
+    fn new(path: &'a Path, limits: &'a ReadLimits) -> ObjReader<'a> {
+        ObjReader {
+            path,
+            limits,
+            positions: Vec::new(),
+            uvs: Vec::new(),
+            normals: Vec::new(),
+            triangles: Vec::new(),
+            corner_uv: Vec::new(),
+            corner_normal: Vec::new(),
+            uv_corners: 0,
+            all_have_normal: true,
+            triangle_lines: Vec::new(),
+            polygon: Vec::new(),
+            polygon_points: Vec::new(),
+            local_triangles: Vec::new(),
+            material_names: Vec::new(),
+            material: NO_MATERIAL,
+            triangle_materials: Vec::new(),
+            libraries: Vec::new(),
         }
     }
-    let lookup = |indices: &[i64], table_len: usize, what: &str| -> Result<(), MeshError> {
-        if let Some((k, &i)) = indices.iter().enumerate().find(|&(_, &i)| i != NO_VALUE && i as usize >= table_len) {
-            return Err(MeshError::parse(
-                path,
-                format!("line {}", triangle_lines[k / 3]),
-                format!("face refers to {what} {} but the file has {table_len}", i + 1),
-            ));
+
+    /// A `usemtl` statement: the material `name` is in force from here.
+    fn use_material(&mut self, name: &str) {
+        self.material = match self.material_names.iter().position(|n| n == name) {
+            Some(i) => i as u32,
+            None => {
+                self.material_names.push(name.to_string());
+                self.material_names.len() as u32 - 1
+            }
+        };
+    }
+
+    /// An `f` statement on `line`: its corners resolved, the polygon triangulated.
+    fn face<'t>(&mut self, tokens: impl Iterator<Item = &'t str>, line: usize) -> Result<(), MeshError> {
+        let path = self.path;
+        self.polygon.clear();
+        for token in tokens {
+            let mut parts = token.split('/');
+            let position = resolve(parts.next().unwrap_or(""), self.positions.len(), path, line)?;
+            let uv = match parts.next() {
+                Some("") | None => None,
+                Some(t) => Some(resolve(t, self.uvs.len(), path, line)?),
+            };
+            let normal = match parts.next() {
+                Some("") | None => None,
+                Some(t) => Some(resolve(t, self.normals.len(), path, line)?),
+            };
+            self.polygon.push(Corner { position, uv, normal });
+        }
+        let corners = self.polygon.len();
+        if corners < 3 {
+            let reason = format!("face has {corners} corners; a face needs at least 3");
+            return Err(MeshError::parse(path, format!("line {line}"), reason));
+        }
+        if corners > super::options::MAX_POLYGON_CORNERS {
+            let most = super::options::MAX_POLYGON_CORNERS;
+            let reason = format!("face has {corners} corners; at most {most} are accepted");
+            return Err(MeshError::parse(path, format!("line {line}"), reason));
+        }
+        // Checked before triangulating: n corners always make n − 2 triangles.
+        self.limits.check_faces((self.triangles.len() + corners - 2) as u64, path)?;
+        self.triangulate();
+        for t in &self.local_triangles {
+            let mut tri = [0u32; 3];
+            for (slot, &k) in tri.iter_mut().zip(t) {
+                let c = self.polygon[k];
+                *slot = u32::try_from(c.position).map_err(|_| {
+                    MeshError::parse(path, format!("line {line}"), format!("vertex index {} too large", c.position + 1))
+                })?;
+                // (A corner without one is marked: see the texture coordinates in `finish`.)
+                self.corner_uv.push(c.uv.unwrap_or(NO_VALUE));
+                self.uv_corners += c.uv.is_some() as usize;
+                match c.normal {
+                    Some(i) => self.corner_normal.push(i),
+                    None => self.all_have_normal = false,
+                }
+            }
+            self.triangles.push(tri);
+            self.triangle_lines.push(line as u32);
+            self.triangle_materials.push(self.material);
         }
         Ok(())
-    };
-    let mut corners = CornerAttributes::default();
-    // Texture coordinates on some faces only: the others get zero, as a glTF primitive without
-    // them beside one with them does (such a face has no texture to sample; dropping them all
-    // would take the texture from the faces that have one).
-    if uv_corners > 0 {
-        lookup(&corner_uv, uvs.len(), "texture coordinate")?;
-        corners.uvs = Some(corner_uv.iter().map(|&i| if i == NO_VALUE { [0.0; 2] } else { uvs[i as usize] }).collect());
     }
-    if all_have_normal && !triangles.is_empty() {
-        lookup(&corner_normal, normals.len(), "normal")?;
-        corners.normals = Some(corner_normal.iter().map(|&i| normals[i as usize]).collect());
-    }
-    // Normals on some faces and not on others are left out (faces without them are drawn flat,
-    // which per-corner values could hold but the simplifier could then not move), and said (the
-    // warnings of every command that writes a result).
-    let corner_count = 3 * triangles.len();
-    let partial = !all_have_normal && !corner_normal.is_empty();
-    let not_carried: Vec<String> = partial
-        .then(|| format!("normals (given at {} of {corner_count} face corners)", corner_normal.len()))
-        .into_iter()
-        .collect();
-    if !material_names.is_empty() || !not_carried.is_empty() {
-        let mut library = super::mtl::library(&material_names, &libraries, folder);
-        library.not_carried = not_carried;
-        if !material_names.is_empty() {
-            corners.materials = Some(triangle_materials.iter().flat_map(|&m| [m; 3]).collect());
+
+    /// The polygon's triangles (as corner numbers) into `local_triangles`.
+    fn triangulate(&mut self) {
+        self.local_triangles.clear();
+        if self.polygon.len() == 3 {
+            self.local_triangles.push([0, 1, 2]);
+            return;
         }
-        corners.library = Some(std::sync::Arc::new(library));
+        // Positions of forward references are unknown yet; such polygons are fanned.
+        let known = self.polygon.iter().all(|c| (c.position as usize) < self.positions.len());
+        self.polygon_points.clear();
+        let positions = &self.positions;
+        self.polygon_points.extend(self.polygon.iter().map(|c| {
+            if known {
+                let p = positions[c.position as usize];
+                DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+            } else {
+                DVec3::ZERO
+            }
+        }));
+        triangulate_polygon(&self.polygon_points, &mut self.local_triangles);
     }
-    let mut mesh = Mesh { positions, triangles, corners };
-    if !mesh.corners.is_empty() {
-        // Exporters that write one `v` per combination of values (trimesh, as glTF and PLY store
-        // them) cut the surface open along every seam: joined again, a seam is a seam, which the
-        // simplifier moves both sides of together, not two borders it would move apart (a crack).
-        mesh.join_cut_seams();
+
+    /// The mesh, once every line is read: forward references checked, per-corner values looked up,
+    /// the materials' library read (`folder`: where its files are).
+    fn finish(self, folder: Option<&Path>) -> Result<Mesh, MeshError> {
+        let path = self.path;
+        let vertex_count = self.positions.len();
+        let triangle_lines = &self.triangle_lines;
+        for (t, tri) in self.triangles.iter().enumerate() {
+            if let Some(&i) = tri.iter().find(|&&i| i as usize >= vertex_count) {
+                return Err(MeshError::parse(
+                    path,
+                    format!("line {}", triangle_lines[t]),
+                    format!("face refers to vertex {} but the file has {vertex_count} vertices", i as u64 + 1),
+                ));
+            }
+        }
+        let lookup = |indices: &[i64], table_len: usize, what: &str| -> Result<(), MeshError> {
+            if let Some((k, &i)) = indices.iter().enumerate().find(|&(_, &i)| i != NO_VALUE && i as usize >= table_len)
+            {
+                return Err(MeshError::parse(
+                    path,
+                    format!("line {}", triangle_lines[k / 3]),
+                    format!("face refers to {what} {} but the file has {table_len}", i + 1),
+                ));
+            }
+            Ok(())
+        };
+        let mut corners = CornerAttributes::default();
+        // Texture coordinates on some faces only: the others get zero, as a glTF primitive without
+        // them beside one with them does (such a face has no texture to sample; dropping them all
+        // would take the texture from the faces that have one).
+        if self.uv_corners > 0 {
+            lookup(&self.corner_uv, self.uvs.len(), "texture coordinate")?;
+            let uvs = &self.uvs;
+            corners.uvs =
+                Some(self.corner_uv.iter().map(|&i| if i == NO_VALUE { [0.0; 2] } else { uvs[i as usize] }).collect());
+        }
+        if self.all_have_normal && !self.triangles.is_empty() {
+            lookup(&self.corner_normal, self.normals.len(), "normal")?;
+            corners.normals = Some(self.corner_normal.iter().map(|&i| self.normals[i as usize]).collect());
+        }
+        // Normals on some faces and not on others are left out (faces without them are drawn flat,
+        // which per-corner values could hold but the simplifier could then not move), and said (the
+        // warnings of every command that writes a result).
+        let corner_count = 3 * self.triangles.len();
+        let partial = !self.all_have_normal && !self.corner_normal.is_empty();
+        let not_carried: Vec<String> = partial
+            .then(|| format!("normals (given at {} of {corner_count} face corners)", self.corner_normal.len()))
+            .into_iter()
+            .collect();
+        if !self.material_names.is_empty() || !not_carried.is_empty() {
+            let mut library = super::mtl::library(&self.material_names, &self.libraries, folder);
+            library.not_carried = not_carried;
+            if !self.material_names.is_empty() {
+                corners.materials = Some(self.triangle_materials.iter().flat_map(|&m| [m; 3]).collect());
+            }
+            corners.library = Some(std::sync::Arc::new(library));
+        }
+        let mut mesh = Mesh { positions: self.positions, triangles: self.triangles, corners };
+        if !mesh.corners.is_empty() {
+            // Exporters that write one `v` per combination of values (trimesh, as glTF and PLY store
+            // them) cut the surface open along every seam: joined again, a seam is a seam, which the
+            // simplifier moves both sides of together, not two borders it would move apart (a crack).
+            mesh.join_cut_seams();
+        }
+        debug_assert!(mesh.check().is_ok());
+        Ok(mesh)
     }
-    debug_assert!(mesh.check().is_ok());
-    Ok(mesh)
 }
 
 /// Writes positions and triangles as OBJ (1-based indices), with the texture coordinates (`vt`)

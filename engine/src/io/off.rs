@@ -33,36 +33,7 @@ pub fn read_off(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
         .map(|(i, l)| (i + 1, l.split('#').next().unwrap_or("").trim()))
         .filter(|(_, l)| !l.is_empty());
 
-    let (first, header) = lines.next().ok_or_else(|| MeshError::parse(path, "header", "empty file"))?;
-    let mut tokens = header.split_ascii_whitespace();
-    let keyword = tokens.next().expect("line is not empty");
-    if !keyword.ends_with("OFF") || !keyword[..keyword.len() - 3].chars().all(|c| "STCN".contains(c)) {
-        let reason = if keyword.contains('4') || keyword.contains('n') {
-            format!("'{keyword}': 4D and nD OFF are not supported")
-        } else {
-            format!("'{keyword}' is not an OFF keyword")
-        };
-        return Err(MeshError::parse(path, format!("line {first}"), reason));
-    }
-    let mut rest: Vec<&str> = tokens.collect();
-    if rest.first() == Some(&"BINARY") {
-        return Err(MeshError::parse(path, format!("line {first}"), "binary OFF is not supported"));
-    }
-    let mut counts_line = first;
-    if rest.is_empty() {
-        let (n, l) = lines.next().ok_or_else(|| MeshError::parse(path, "header", "no 'vertices faces edges' line"))?;
-        counts_line = n;
-        rest = l.split_ascii_whitespace().collect();
-    }
-    let count = |k: usize, what: &str| -> Result<u64, MeshError> {
-        let token = rest.get(k).ok_or_else(|| {
-            MeshError::parse(path, format!("line {counts_line}"), format!("the counts line has no {what} count"))
-        })?;
-        token.parse().map_err(|_| {
-            MeshError::parse(path, format!("line {counts_line}"), format!("{what} count '{token}' is not a count"))
-        })
-    };
-    let (vertex_count, face_count) = (count(0, "vertex")?, count(1, "face")?);
+    let (vertex_count, face_count) = read_header(&mut lines, path)?;
     limits.check_vertices(vertex_count, path)?;
     limits.check_faces(face_count, path)?;
 
@@ -122,6 +93,41 @@ pub fn read_off(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
         }
     }
     Mesh::new(positions, triangles)
+}
+
+/// The header: the OFF keyword (4D, nD and binary OFF refused by name) and the vertex and face
+/// counts, on its line or the next.
+fn read_header<'a>(lines: &mut impl Iterator<Item = (usize, &'a str)>, path: &Path) -> Result<(u64, u64), MeshError> {
+    let (first, header) = lines.next().ok_or_else(|| MeshError::parse(path, "header", "empty file"))?;
+    let mut tokens = header.split_ascii_whitespace();
+    let keyword = tokens.next().expect("line is not empty");
+    if !keyword.ends_with("OFF") || !keyword[..keyword.len() - 3].chars().all(|c| "STCN".contains(c)) {
+        let reason = if keyword.contains('4') || keyword.contains('n') {
+            format!("'{keyword}': 4D and nD OFF are not supported")
+        } else {
+            format!("'{keyword}' is not an OFF keyword")
+        };
+        return Err(MeshError::parse(path, format!("line {first}"), reason));
+    }
+    let mut rest: Vec<&str> = tokens.collect();
+    if rest.first() == Some(&"BINARY") {
+        return Err(MeshError::parse(path, format!("line {first}"), "binary OFF is not supported"));
+    }
+    let mut counts_line = first;
+    if rest.is_empty() {
+        let (n, l) = lines.next().ok_or_else(|| MeshError::parse(path, "header", "no 'vertices faces edges' line"))?;
+        counts_line = n;
+        rest = l.split_ascii_whitespace().collect();
+    }
+    let count = |k: usize, what: &str| -> Result<u64, MeshError> {
+        let token = rest.get(k).ok_or_else(|| {
+            MeshError::parse(path, format!("line {counts_line}"), format!("the counts line has no {what} count"))
+        })?;
+        token.parse().map_err(|_| {
+            MeshError::parse(path, format!("line {counts_line}"), format!("{what} count '{token}' is not a count"))
+        })
+    };
+    Ok((count(0, "vertex")?, count(1, "face")?))
 }
 
 /// The `vertex_count` vertex lines that follow the header (`room`: the most the text could hold).

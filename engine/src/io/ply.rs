@@ -259,30 +259,7 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
     let header = parse_header(bytes, path)?;
     let body = &bytes[header.body_offset..];
 
-    // Refuse counts that the remaining bytes cannot hold, before allocating anything.
-    let mut needed: u64 = 0;
-    for e in &header.elements {
-        let per_element = match header.encoding {
-            Encoding::Ascii => 2, // at least one digit and a newline
-            _ => e.min_binary_size().max(1),
-        };
-        needed = needed.saturating_add(e.count.saturating_mul(per_element));
-        match e.name.as_str() {
-            "vertex" => limits.check_vertices(e.count, path)?,
-            "face" => limits.check_faces(e.count, path)?,
-            _ => {}
-        }
-    }
-    if needed > body.len() as u64 {
-        return Err(MeshError::parse(
-            path,
-            "header",
-            format!(
-                "declared elements need at least {needed} bytes but only {} follow the header (truncated or lying header)",
-                body.len()
-            ),
-        ));
-    }
+    check_room(&header, body.len(), path, limits)?;
 
     let mut source: Box<dyn ValueSource> = match header.encoding {
         Encoding::Ascii => {
@@ -305,31 +282,9 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
     for element in &header.elements {
         let is_vertex = element.name == "vertex";
         let is_face = element.name == "face";
-        let mut xyz_slots = [usize::MAX; 3];
-        let mut normal_slots = [usize::MAX; 3];
-        let mut uv_slots = [usize::MAX; 2];
-        let mut color_slots = [usize::MAX; 4];
+        let (xyz_slots, normal_slots, uv_slots, color_slots) = vertex_slots(element);
         if is_vertex {
             saw_vertex = true;
-            for (k, p) in element.properties.iter().enumerate() {
-                if let Property::Scalar { name, .. } = p {
-                    match name.as_str() {
-                        "x" => xyz_slots[0] = k,
-                        "y" => xyz_slots[1] = k,
-                        "z" => xyz_slots[2] = k,
-                        "nx" => normal_slots[0] = k,
-                        "ny" => normal_slots[1] = k,
-                        "nz" => normal_slots[2] = k,
-                        "u" | "s" | "texture_u" | "texture_s" => uv_slots[0] = k,
-                        "v" | "t" | "texture_v" | "texture_t" => uv_slots[1] = k,
-                        "red" | "diffuse_red" => color_slots[0] = k,
-                        "green" | "diffuse_green" => color_slots[1] = k,
-                        "blue" | "diffuse_blue" => color_slots[2] = k,
-                        "alpha" | "diffuse_alpha" => color_slots[3] = k,
-                        _ => {}
-                    }
-                }
-            }
             if xyz_slots.contains(&usize::MAX) {
                 return Err(MeshError::parse(path, "header", "vertex element lacks scalar x, y and z properties"));
             }
@@ -394,15 +349,8 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
             source.end_element().map_err(|r| MeshError::parse(path, loc(i), r))?;
             if is_vertex {
                 let p = [xyz[0] as f32, xyz[1] as f32, xyz[2] as f32];
-                if p.iter().any(|c| !c.is_finite()) {
-                    return Err(MeshError::parse(path, loc(i), format!("non-finite coordinate {xyz:?}")));
-                }
-                for (name, values) in [("normal", &normal[..]), ("texture coordinate", &uv[..]), ("colour", &color[..])]
-                {
-                    if values.iter().any(|c| !c.is_finite()) {
-                        return Err(MeshError::parse(path, loc(i), format!("non-finite {name} {values:?}")));
-                    }
-                }
+                check_finite(xyz, p, [&normal[..], &uv[..], &color[..]])
+                    .map_err(|r| MeshError::parse(path, loc(i), r))?;
                 positions.push(p);
                 if !normal_slots.contains(&usize::MAX) {
                     normals.push(normal);
@@ -434,29 +382,7 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
     }
 
     let vertex_count = positions.len();
-    let mut triangles: Vec<[u32; 3]> = Vec::with_capacity(polygons.len());
-    let mut local = Vec::new();
-    let mut points = Vec::new();
-    for (face, indices) in &polygons {
-        if let Some(&bad) = indices.iter().find(|&&v| v < 0 || v as usize >= vertex_count) {
-            return Err(MeshError::parse(
-                path,
-                format!("face {face}"),
-                format!("refers to vertex {bad} but the file has {vertex_count} vertices"),
-            ));
-        }
-        if indices.len() > super::options::MAX_POLYGON_CORNERS {
-            return Err(MeshError::parse(
-                path,
-                format!("face {face}"),
-                format!("has {} corners; at most {} are accepted", indices.len(), super::options::MAX_POLYGON_CORNERS),
-            ));
-        }
-        // Checked before triangulating: n corners always make n − 2 triangles.
-        limits.check_faces((triangles.len() + indices.len().saturating_sub(2)) as u64, path)?;
-        triangulate_face(indices.iter().map(|&v| positions[v as usize]), &mut points, &mut local);
-        triangles.extend(local.iter().map(|t| [indices[t[0]] as u32, indices[t[1]] as u32, indices[t[2]] as u32]));
-    }
+    let triangles = triangles_of(&polygons, &positions, path, limits)?;
     // Per-vertex values become per-corner values: a PLY vertex has one of each.
     fn per_corner<T: Copy>(per_vertex: Vec<T>, vertex_count: usize, triangles: &[[u32; 3]]) -> Option<Vec<T>> {
         (per_vertex.len() == vertex_count && vertex_count > 0)
@@ -476,6 +402,113 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
     }
     mesh.check()?;
     Ok(mesh)
+}
+
+/// Refuses counts that the bytes after the header (`body_len`) cannot hold, and counts over the
+/// limits, before anything is allocated.
+fn check_room(header: &Header, body_len: usize, path: &Path, limits: &ReadLimits) -> Result<(), MeshError> {
+    let mut needed: u64 = 0;
+    for e in &header.elements {
+        let per_element = match header.encoding {
+            Encoding::Ascii => 2, // at least one digit and a newline
+            _ => e.min_binary_size().max(1),
+        };
+        needed = needed.saturating_add(e.count.saturating_mul(per_element));
+        match e.name.as_str() {
+            "vertex" => limits.check_vertices(e.count, path)?,
+            "face" => limits.check_faces(e.count, path)?,
+            _ => {}
+        }
+    }
+    if needed > body_len as u64 {
+        return Err(MeshError::parse(
+            path,
+            "header",
+            format!(
+                "declared elements need at least {needed} bytes but only {} follow the header (truncated or lying header)",
+                body_len
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The slots of a vertex element's scalar properties: position, normal, texture coordinate and
+/// colour (`usize::MAX` where the element has none).
+fn vertex_slots(element: &Element) -> ([usize; 3], [usize; 3], [usize; 2], [usize; 4]) {
+    let mut xyz_slots = [usize::MAX; 3];
+    let mut normal_slots = [usize::MAX; 3];
+    let mut uv_slots = [usize::MAX; 2];
+    let mut color_slots = [usize::MAX; 4];
+    for (k, p) in element.properties.iter().enumerate() {
+        if let Property::Scalar { name, .. } = p {
+            match name.as_str() {
+                "x" => xyz_slots[0] = k,
+                "y" => xyz_slots[1] = k,
+                "z" => xyz_slots[2] = k,
+                "nx" => normal_slots[0] = k,
+                "ny" => normal_slots[1] = k,
+                "nz" => normal_slots[2] = k,
+                "u" | "s" | "texture_u" | "texture_s" => uv_slots[0] = k,
+                "v" | "t" | "texture_v" | "texture_t" => uv_slots[1] = k,
+                "red" | "diffuse_red" => color_slots[0] = k,
+                "green" | "diffuse_green" => color_slots[1] = k,
+                "blue" | "diffuse_blue" => color_slots[2] = k,
+                "alpha" | "diffuse_alpha" => color_slots[3] = k,
+                _ => {}
+            }
+        }
+    }
+    (xyz_slots, normal_slots, uv_slots, color_slots)
+}
+
+/// `Err` naming the first value of a vertex (its position `xyz`, as `p` in single precision, and
+/// its normal, texture coordinate and colour) that is not a finite number.
+fn check_finite(xyz: [f64; 3], p: [f32; 3], values: [&[f32]; 3]) -> Result<(), String> {
+    if p.iter().any(|c| !c.is_finite()) {
+        return Err(format!("non-finite coordinate {xyz:?}"));
+    }
+    for (name, values) in ["normal", "texture coordinate", "colour"].into_iter().zip(values) {
+        if values.iter().any(|c| !c.is_finite()) {
+            return Err(format!("non-finite {name} {values:?}"));
+        }
+    }
+    Ok(())
+}
+
+/// The faces' polygons (face number, vertex indices) triangulated, every index checked against the
+/// vertices and the triangle count against the limits before each polygon is triangulated.
+fn triangles_of(
+    polygons: &[(usize, Vec<i64>)],
+    positions: &[[f32; 3]],
+    path: &Path,
+    limits: &ReadLimits,
+) -> Result<Vec<[u32; 3]>, MeshError> {
+    let vertex_count = positions.len();
+    let mut triangles: Vec<[u32; 3]> = Vec::with_capacity(polygons.len());
+    let mut local = Vec::new();
+    let mut points = Vec::new();
+    for (face, indices) in polygons {
+        if let Some(&bad) = indices.iter().find(|&&v| v < 0 || v as usize >= vertex_count) {
+            return Err(MeshError::parse(
+                path,
+                format!("face {face}"),
+                format!("refers to vertex {bad} but the file has {vertex_count} vertices"),
+            ));
+        }
+        if indices.len() > super::options::MAX_POLYGON_CORNERS {
+            return Err(MeshError::parse(
+                path,
+                format!("face {face}"),
+                format!("has {} corners; at most {} are accepted", indices.len(), super::options::MAX_POLYGON_CORNERS),
+            ));
+        }
+        // Checked before triangulating: n corners always make n − 2 triangles.
+        limits.check_faces((triangles.len() + indices.len().saturating_sub(2)) as u64, path)?;
+        triangulate_face(indices.iter().map(|&v| positions[v as usize]), &mut points, &mut local);
+        triangles.extend(local.iter().map(|t| [indices[t[0]] as u32, indices[t[1]] as u32, indices[t[2]] as u32]));
+    }
+    Ok(triangles)
 }
 
 /// Writes a binary little-endian PLY: float x, y, z per vertex; uchar count + int indices per face.

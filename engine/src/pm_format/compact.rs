@@ -192,26 +192,9 @@ pub(super) fn decode_geometry(
         };
         let vl = neighbour(case != 2)?;
         let vr = neighbour(case != 1)?;
-        let from = at[vs as usize];
-        // Out-of-range deltas (a corrupt file) wrap and then fail the grid check; nothing overflows.
-        let fits = |q: &[i64; 3]| on_grid(&mut &q[..], 3, grid.bits).is_some();
-        let mut new = [0i64; 3];
-        for a in 0..3 {
-            new[a] = from[a].wrapping_add(codes.new_vertex[a].get_signed(&mut b).map_err(cut)?);
-        }
-        if !fits(&new) {
-            return Err(bad("a position off the grid".into()));
-        }
-        let mut moved = from;
-        if moves {
-            for a in 0..3 {
-                let r = codes.moved_vertex[a].get_signed(&mut b).map_err(cut)?;
-                moved[a] = (from[a] - (new[a] - from[a]) / 2).wrapping_add(r);
-            }
-            if !fits(&moved) {
-                return Err(bad("a position off the grid".into()));
-            }
-        }
+        let (new, moved) = split_positions(&mut b, &mut codes, at[vs as usize], moves, grid.bits)
+            .map_err(cut)?
+            .ok_or_else(|| bad("a position off the grid".into()))?;
         let code = match previous_error {
             None => b.get(16).map_err(cut)?,
             Some(p) => {
@@ -241,6 +224,40 @@ pub(super) fn decode_geometry(
         return Err(MeshError::parse(r.path, format!("byte {start}"), "unexpected bits after the last split"));
     }
     Ok((base, splits, grid))
+}
+
+/// A split's new vertex and the split vertex's place after it, as grid integers.
+type SplitPlaces = ([i64; 3], [i64; 3]);
+
+/// A split's new vertex and, when `moves`, the split vertex's new place, as grid integers coded
+/// against its place `from`; `None` when either is off the grid of `bits`. Out-of-range deltas (a
+/// corrupt file) wrap and then fail the grid check; nothing overflows.
+fn split_positions(
+    b: &mut BitReader,
+    codes: &mut GeometryCodes,
+    from: [i64; 3],
+    moves: bool,
+    bits: u8,
+) -> Result<Option<SplitPlaces>, OutOfBits> {
+    let fits = |q: &[i64; 3]| on_grid(&mut &q[..], 3, bits).is_some();
+    let mut new = [0i64; 3];
+    for a in 0..3 {
+        new[a] = from[a].wrapping_add(codes.new_vertex[a].get_signed(b)?);
+    }
+    if !fits(&new) {
+        return Ok(None);
+    }
+    let mut moved = from;
+    if moves {
+        for a in 0..3 {
+            let r = codes.moved_vertex[a].get_signed(b)?;
+            moved[a] = (from[a] - (new[a] - from[a]) / 2).wrapping_add(r);
+        }
+        if !fits(&moved) {
+            return Ok(None);
+        }
+    }
+    Ok(Some((new, moved)))
 }
 
 /// The base mesh at the start of the geometry section: `n0` positions on `grid` (returned too, as

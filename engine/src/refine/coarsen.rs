@@ -90,6 +90,40 @@ impl RingCache {
     }
 }
 
+/// The simplifier's options for a triangle collapse: QEM at the optimal place, borders kept.
+fn collapse_options() -> SimplifyOptions {
+    SimplifyOptions {
+        metric: Metric::Qem,
+        placement: Placement::Optimal,
+        boundary: BoundaryMode::Preserve,
+        ..Default::default()
+    }
+}
+
+/// The energy of vertex `v` with its `ring`, from the mean edge lengths around each vertex.
+fn energy_of(state: &State, mean_length: &[f64], v: u32, ring: &[u32]) -> f64 {
+    vertex_energy(state.point(v), ring.iter().map(|&u| (state.point(u), mean_length[u as usize])))
+}
+
+/// Each vertex's mean edge length and energy at the start.
+fn initial_energies(state: &State) -> (Vec<f64>, Vec<f64>) {
+    let vertex_count = state.vertex_count();
+    let mut scratch = Vec::new();
+    let mean_length: Vec<f64> = (0..vertex_count as u32)
+        .map(|v| {
+            state.neighbours(v, &mut scratch);
+            mean_edge_length(state, v, &scratch)
+        })
+        .collect();
+    let energy: Vec<f64> = (0..vertex_count as u32)
+        .map(|v| {
+            state.neighbours(v, &mut scratch);
+            energy_of(state, &mean_length, v, &scratch)
+        })
+        .collect();
+    (mean_length, energy)
+}
+
 /// The triangle collapse of face `t`: its cheapest legal edge (step 1), then, while more than
 /// `target_faces` of the `faces_alive` remain, its third vertex merged into the survivor at the
 /// optimum of the three quadrics (step 2). The survivor, the faces removed and the collapses made;
@@ -106,7 +140,8 @@ fn collapse_triangle(
     let first = candidates.into_iter().find_map(|c| state.is_legal(&c).ok())?;
     let (kept, gone) = (first.candidate().survivor, first.candidate().removed);
     let third = *t.iter().find(|&&v| v != kept && v != gone).expect("three");
-    let faces_of = |r: &crate::pm::CollapseRecord| (r.left_face != u32::MAX) as usize + (r.right_face != u32::MAX) as usize;
+    let faces_of =
+        |r: &crate::pm::CollapseRecord| (r.left_face != u32::MAX) as usize + (r.right_face != u32::MAX) as usize;
     let mut removed = faces_of(&state.collapse(first));
     let mut collapses = 1;
     let mut survivor = kept;
@@ -131,32 +166,12 @@ pub(crate) fn coarsen(
     target_faces: usize,
     cancel: Option<&std::sync::atomic::AtomicBool>,
 ) -> Result<Coarsened, MeshError> {
-    let options = SimplifyOptions {
-        metric: Metric::Qem,
-        placement: Placement::Optimal,
-        boundary: BoundaryMode::Preserve,
-        ..Default::default()
-    };
+    let options = collapse_options();
     let (mut state, _) = State::new(mesh, &options);
     // Attributes ride along as in the simplifier: a seam vertex collapses only along its seam.
     state.carry_attributes(mesh);
     let vertex_count = mesh.vertex_count();
-    let mut scratch = Vec::new();
-    let mut mean_length: Vec<f64> = (0..vertex_count as u32)
-        .map(|v| {
-            state.neighbours(v, &mut scratch);
-            mean_edge_length(&state, v, &scratch)
-        })
-        .collect();
-    let energy_of = |state: &State, mean_length: &[f64], v: u32, ring: &[u32]| {
-        vertex_energy(state.point(v), ring.iter().map(|&u| (state.point(u), mean_length[u as usize])))
-    };
-    let mut energy: Vec<f64> = (0..vertex_count as u32)
-        .map(|v| {
-            state.neighbours(v, &mut scratch);
-            energy_of(&state, &mean_length, v, &scratch)
-        })
-        .collect();
+    let (mut mean_length, mut energy) = initial_energies(&state);
     let mut rings = RingCache::new(vertex_count);
     let face_energy =
         |state: &State, energy: &[f64], f: u32| -> f64 { state.triangle(f).iter().map(|&v| energy[v as usize]).sum() };
@@ -165,11 +180,8 @@ pub(crate) fn coarsen(
     let mut heap: BinaryHeap<(Reverse<u64>, Reverse<u32>, u32)> =
         (0..mesh.face_count() as u32).map(|f| (key(face_energy(&state, &energy, f)), Reverse(f), 0)).collect();
 
-    let mut faces_alive = mesh.face_count();
-    let mut collapses = 0;
-    let mut popped = Vec::new();
-    let mut pops = 0usize;
-    let mut touched: Vec<u32> = Vec::new();
+    let (mut faces_alive, mut collapses, mut pops) = (mesh.face_count(), 0, 0usize);
+    let (mut popped, mut touched): (Vec<f64>, Vec<u32>) = (Vec::new(), Vec::new());
     // Stamps for de-duplicating the touched vertices and faces of one step; the queue's order is
     // total (energy, face id), so the push order of re-queued faces does not matter.
     let mut vertex_mark = vec![0u32; vertex_count];

@@ -29,8 +29,8 @@ impl State<'_> {
     /// - along a border, for a collapse of two border vertices: how far each endpoint is from the
     ///   border's new line (its neighbours across the border, c and d, joined through p), its
     ///   square weighed [`BORDER_WEIGHT`] times: the faces alone do not see a border cut across a
-    ///   bend (a move within their planes), which lays faces over the hole beside it (the loops
-    ///   round beetle's eyes, cut to a few chords).
+    ///   bend (a move within their planes), which lays faces over the hole beside it (a small
+    ///   hole's border loop cut to a few chords).
     ///
     /// Only the moved faces are read, all of which [`State::is_legal`] reads next anyway. Zero for
     /// a collapse that leaves the surface where it was (a flat neighbourhood, a move along a

@@ -30,14 +30,13 @@ use super::vertex::{CONE_MIN_QUALITY, NONE, NormalCone, VertexData, VertexKind, 
 /// Weight of the boundary-constraint planes relative to the face planes.
 const BOUNDARY_WEIGHT: f64 = 10.0;
 /// Weight of the seam constraint planes (per side of a seam edge, times its squared length).
-/// Chosen by measurement (docs/attributes-report.md): 0.2–0.3 lower the texture error on Duck,
-/// CesiumMan, Fox and fuze at an unchanged position error; from 0.5 up Duck's and spot's position
-/// error grows (spot 1.3× meshoptimizer's at 1).
+/// Chosen by measurement over the textured assets (docs/attributes-report.md): 0.2–0.3 lower the
+/// texture error at an unchanged position error; from 0.5 up the position error grows.
 const SEAM_WEIGHT: f64 = 0.3;
 /// Weight of the constraint planes along an anchor's spokes where the texture coordinates differ
 /// on their two sides (a sphere's pole, where each face has its own value). Chosen by
-/// measurement (docs/attributes-report.md): capsule's texture error falls with 0.3 and falls more
-/// with 1 and 3; from 30 Fox stops above its face count.
+/// measurement (docs/attributes-report.md): a pole's texture error falls with 0.3 and more with 1
+/// and 3; from 30 the run stops above its face count on small assets.
 const SPOKE_WEIGHT: f64 = 1.0;
 
 /// Mutable state of one run, in parts with one owner each: the algorithm owns it; nothing is left
@@ -265,8 +264,8 @@ impl<'o> State<'o> {
     /// Constraint planes along the seams, as along the borders: through each seam edge and
     /// perpendicular to each face beside it. A seam vertex moves only along its seam (rule 7), and
     /// with these a collapse along a seam that turns costs what it moves the seam by, so that a
-    /// chart keeps its outline on the surface (without them a seam loop on a flat stretch, an
-    /// eye's chart on the Duck, shrinks to a triangle for almost nothing and its texture spreads
+    /// chart keeps its outline on the surface (without them a seam loop on a flat stretch, a small
+    /// chart such as an eye's, shrinks to a triangle for almost nothing and its texture spreads
     /// over the faces around).
     ///
     /// Also along an anchor's spokes (edges to a vertex off every seam) whose two faces give the
@@ -508,6 +507,11 @@ impl<'o> State<'o> {
     /// Corners of face `f` (kept current only for a state made with [`State::new`]).
     pub(crate) fn triangle(&self, f: u32) -> [u32; 3] {
         self.topo.triangle(f)
+    }
+
+    /// Number of vertices the state was made with (alive or not).
+    pub(crate) fn vertex_count(&self) -> usize {
+        self.vertices.len()
     }
 
     /// Whether face `f` is still in the mesh.

@@ -41,7 +41,7 @@ impl State<'_> {
         }
         // Rule 7, with per-corner attributes only: no values carried across a seam. Checked before
         // the rest of rule 3, which reads both fans in full: it is cheaper, and on textured meshes
-        // it refuses most (over half of Lantern's refusals).
+        // it is the rule that refuses most.
         if !self.seams.corner_source.is_empty() {
             let dead = [shared[0].face, if shared_count == 2 { shared[1].face } else { NONE }];
             let sides = self.seam_sides(a, b, &dead[..shared_count]).ok_or(Refusal::Seam)?;
@@ -243,14 +243,13 @@ impl State<'_> {
     ///   with the same texture coordinates, is released: an ordinary vertex again (interior or
     ///   boundary, as its fan is closed or not), still on its seam, so it moves along it. Where the
     ///   two sets differ in normals only (a hard edge through the vertex, the texture continuous)
-    ///   it moves along that edge as any vertex of the edge does: on CesiumMan, whose anchors are
+    ///   it moves along that edge as any vertex of the edge does (on an asset whose anchors are
     ///   mostly of that kind, the position error at 10% fell to a third and the texture error to a
-    ///   quarter (docs/attributes-report.md). The other anchors stay, as measured: released where
-    ///   the two sets differ in texture coordinates, fuze's seam vertices slid along the seam and
-    ///   nearly doubled its texture error; released where one set is left, Fox's position error
-    ///   at 74 faces rose from 0.154 to 0.200.
+    ///   quarter: docs/attributes-report.md). The other anchors stay, as measured: released where
+    ///   the two sets differ in texture coordinates, seam vertices slid along the seam and nearly
+    ///   doubled the texture error; released where one set is left, the position error rose.
     /// - A seam vertex whose faces now carry one set is off the seam: inside one chart, it collapses
-    ///   as the chart's other vertices do (pirate's texture error 5.7 → 5.3 texels).
+    ///   as the chart's other vertices do.
     ///
     /// Nothing with locked seams, and no anchor with locked borders: those stay whatever their
     /// corners.

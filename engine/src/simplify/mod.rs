@@ -38,7 +38,7 @@
 //! positive costs follow in cost order (`crate::queue::order_key`, costs kept as `f32`). Where the
 //! quadric error itself vanishes (an exactly planar neighbourhood: zero, or too small for an `f32`)
 //! the shorter edge goes first, which keeps the triangles of planar regions well shaped and refuses
-//! far fewer candidates there than leaving them tied did (docs/history/benchmarks-log.md, session 15).
+//! far fewer candidates there than leaving them tied did (docs/history/benchmarks-log.md).
 //! Remaining ties go to the lower first vertex id, then to the queue's layout, which the sequence
 //! of pushes, pops, refills and sweeps fixes (not push order: a heap is not stable): a run is
 //! deterministic, which the progressive mesh's `at_faces` relies on, but a change to the queue
@@ -113,8 +113,8 @@
 //!    corners, agree on attribute values at a and c), and c keeps three faces. The hole is gone
 //!    (a and c are interior vertices from then on; [`SimplifyStats::holes_closed`] counts them)
 //!    and the vertex split that undoes the collapse names c as its hole's corner
-//!    (`crate::pm::Hole`). Without it a mesh with many small holes stops above its target (the
-//!    beetle at 90% did, as meshoptimizer and MeshLab do); with [`BoundaryMode::Lock`] no hole closes;
+//!    (`crate::pm::Hole`). Without it a mesh with many small holes stops above its target (as
+//!    meshoptimizer and MeshLab do); with [`BoundaryMode::Lock`] no hole closes;
 //! 4. every face that survives around a or b keeps a normal within
 //!    [`SimplifyOptions::max_normal_change_degrees`] of its old one (no flips);
 //! 5. no surviving face becomes a needle or zero-area triangle ([`MIN_TRIANGLE_QUALITY`]);

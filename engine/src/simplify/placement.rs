@@ -6,8 +6,7 @@ use glam::DVec3;
 
 use super::kernel::State;
 use super::options::{BoundaryMode, Metric, Placement};
-use super::vertex::VertexKind;
-use super::vertex::to_f64;
+use super::vertex::{VertexData, VertexKind, to_f64};
 
 /// Which endpoint of an edge survives its collapse.
 #[derive(Debug, Clone, Copy)]
@@ -42,19 +41,7 @@ impl State<'_> {
             && self.terms.wedges.is_none()
             && !(may_move && self.config.options.placement != Placement::Endpoint)
         {
-            // The endpoints alone, without attribute quadrics (every ranking on a mesh with
-            // texture coordinates, whose `auto` placement is `endpoint`): the choice of the general
-            // path below, the same operations in the same order, without its closures.
-            let q = va.quadric + vb.quadric;
-            let factor = self.normal_factor(va, vb);
-            let (e_a, e_b) = (q.error(pa), q.error(pb));
-            let (cost_a, cost_b) = ((e_a + 0.0) * factor, (e_b + 0.0) * factor);
-            let take_b = may_keep_b && (!may_keep_a || (cost_b, e_b) < (cost_a, e_a));
-            return match (may_keep_a, take_b) {
-                (_, true) => Some(Choice { cost: cost_b, error: e_b, keep: Keep::B, position: pb }),
-                (true, false) => Some(Choice { cost: cost_a, error: e_a, keep: Keep::A, position: pa }),
-                (false, false) => None,
-            };
+            return self.endpoints_only(va, vb, may_keep_a, may_keep_b);
         }
         let mut best: Option<Choice> = None;
         // Keeps the choice with the lower (cost, error); the first one considered wins a tie.
@@ -135,6 +122,24 @@ impl State<'_> {
             }
         }
         best
+    }
+
+    /// The endpoints alone, without attribute quadrics (every ranking on a mesh with texture
+    /// coordinates, whose `auto` placement is `endpoint`): the choice of [`State::choose`]'s
+    /// general path, the same operations in the same order, without its closures.
+    #[inline]
+    fn endpoints_only(&self, va: &VertexData, vb: &VertexData, may_keep_a: bool, may_keep_b: bool) -> Option<Choice> {
+        let (pa, pb) = (to_f64(va.position), to_f64(vb.position));
+        let q = va.quadric + vb.quadric;
+        let factor = self.normal_factor(va, vb);
+        let (e_a, e_b) = (q.error(pa), q.error(pb));
+        let (cost_a, cost_b) = ((e_a + 0.0) * factor, (e_b + 0.0) * factor);
+        let take_b = may_keep_b && (!may_keep_a || (cost_b, e_b) < (cost_a, e_a));
+        match (may_keep_a, take_b) {
+            (_, true) => Some(Choice { cost: cost_b, error: e_b, keep: Keep::B, position: pb }),
+            (true, false) => Some(Choice { cost: cost_a, error: e_a, keep: Keep::A, position: pa }),
+            (false, false) => None,
+        }
     }
 
     /// Which ends of edge {a, b} (of classes `ka`, `kb`) may survive its collapse, and whether the

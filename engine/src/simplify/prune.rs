@@ -2,9 +2,9 @@
 //!
 //! A part is a set of faces joined through shared vertices. Collapses keep every part as at
 //! least its smallest manifold form (rule 3: a closed part keeps four faces or more, a ring
-//! more), so on an asset of many small pieces those forms hold faces that the large shapes need:
-//! Lantern's eight chain links kept 142 of its 860 faces while its beam was cut to 8
-//! (docs/attributes-report.md). With `prune`, a part goes whole once the run's largest collapse
+//! more), so on an asset of many small pieces those forms hold faces that the large shapes need
+//! (a chain's links keep their faces while the beam they hang from is cut to a few; measured in
+//! docs/attributes-report.md). With `prune`, a part goes whole once the run's largest collapse
 //! error (paper units) reaches its size: the larger of half its bounding box's diagonal (as
 //! meshoptimizer's `SimplifyPrune` weighs its parts by their radius) and how far its farthest
 //! vertex is from the parts that stay, the distance its absence opens (a hand modelled apart from

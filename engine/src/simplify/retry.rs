@@ -5,9 +5,8 @@
 //! edges of the candidate's ends. So a candidate refused after the last collapse within two edges
 //! of both its ends would be refused again, and the pass leaves it out. On small meshes that end
 //! in refusals (a textured asset whose seams stop it above its target) the passes after the first
-//! cost a quarter of the run; on Fox this leaves out about half of each later pass's edges (the
-//! rest are near the few collapses those passes still find), 4% of its time
-//! (docs/attributes-report.md).
+//! cost a quarter of the run; this leaves out about half of each later pass's edges (the rest
+//! are near the few collapses those passes still find).
 //!
 //! Collapses only merge vertices, so a vertex within two edges of a survivor when it took its
 //! collapse is within two edges of that survivor (or of the vertex it later went into) when the

@@ -9,6 +9,7 @@ use crate::mesh::DistanceUnits;
 use crate::pm::CollapseRecord;
 use crate::queue::{QueueEntry, TieredQueue};
 
+use super::candidate::Candidate;
 use super::guard::GUARDED;
 use super::kernel::State;
 use super::options::{Refusals, StopReason};
@@ -107,23 +108,13 @@ pub(super) fn run(
     let mut live = state.topo.face_alive.len();
     let mut log: Vec<CollapseRecord> =
         Vec::with_capacity(log_reserve(faces_in, target, state.open_vertices, vertex_count));
-    let mut neighbours = Vec::new();
-    let mut refused = Refusals::default();
-    let mut retry = Retry::default();
+    let (mut neighbours, mut refused, mut retry) = (Vec::new(), Refusals::default(), Retry::default());
     // Seams and anchors are looked at again after each collapse that takes faces from their
     // vertices (meshes with per-corner attributes only: without them there are none).
     let with_attributes = !state.seams.corner_source.is_empty();
-    let mut pops = 0usize;
-    let mut passes = 1;
-    let mut collapses_this_pass = 0;
+    let (mut pops, mut passes, mut collapses_this_pass) = (0usize, 1, 0);
     let mut max_collapse_error: f64 = 0.0;
-    // The face count from which the distance term is measured: the guard's from the start, the
-    // fan-distance term's once 70% of the input's faces are gone ([`super::fan_term::FAN_TERM_FROM`]).
-    let term_from = if state.terms.guard.is_some() {
-        live
-    } else {
-        (state.terms.term_base as f64 * (1.0 - super::fan_term::FAN_TERM_FROM)).round() as usize
-    };
+    let term_from = term_from(state, live);
     let stop_reason = loop {
         // Parts as small as the error reached so far go whole, while the target allows.
         if let Some(parts) = &mut parts {
@@ -138,8 +129,7 @@ pub(super) fn run(
         pops += 1;
         // Stop: cancelled by the caller (checked every few hundred pops).
         if pops.is_multiple_of(CANCEL_CHECK_INTERVAL)
-            && let Some(flag) = &options.cancel
-            && flag.load(AtomicOrdering::Relaxed)
+            && options.cancel.as_ref().is_some_and(|f| f.load(AtomicOrdering::Relaxed))
         {
             return Err(MeshError::Cancelled);
         }
@@ -166,26 +156,8 @@ pub(super) fn run(
         if !state.is_current(&entry) {
             continue; // stale: an endpoint changed (or was removed) since this entry was queued
         }
-        let mut chosen = None;
-        if state.has_distance_term() && entry.b & GUARDED == 0 && live <= term_from {
-            // Queued without the distance term, which only adds: rank it with the term now, and
-            // put it back unless it still comes first (the result is the greedy order of the
-            // full costs, at one measurement per candidate that reaches the top).
-            let Some((key, choice)) = state.guarded_key(a, b) else { continue };
-            let guarded = QueueEntry::new(key, a, b | GUARDED, entry.stamp);
-            if heap.top(current).is_some_and(|top| top.rank() < guarded.rank()) {
-                heap.push(guarded);
-                continue;
-            }
-            chosen = Some(choice);
-        }
-        let candidate = match chosen {
-            Some(choice) => state.candidate(a, b, choice),
-            None => match state.evaluate(a, b) {
-                Some(candidate) => candidate,
-                None => continue,
-            },
-        };
+        let measure = state.has_distance_term() && entry.b & GUARDED == 0 && live <= term_from;
+        let Some(candidate) = candidate_at_top(state, &mut heap, &entry, measure) else { continue };
         let merged = state.vertices[a as usize].quadric + state.vertices[b as usize].quadric;
         let error_paper = units.to_paper(merged.distance(to_f64(candidate.position)));
         // Stop: the cheapest collapse left would exceed the error limit (costs are not errors, so
@@ -222,6 +194,36 @@ pub(super) fn run(
     };
     let parts_removed = parts.map_or(0, |p| p.removed);
     Ok(Run { log, stop_reason, refused, max_collapse_error, parts_removed })
+}
+
+/// The face count (of the state's faces alive, `live` at the start) from which the distance term
+/// is measured: the guard's from the start, the fan-distance term's once
+/// [`super::fan_term::FAN_TERM_FROM`] of the input's faces are gone.
+fn term_from(state: &State, live: usize) -> usize {
+    if state.terms.guard.is_some() {
+        live
+    } else {
+        (state.terms.term_base as f64 * (1.0 - super::fan_term::FAN_TERM_FROM)).round() as usize
+    }
+}
+
+/// The candidate of the queue's top `entry`, or `None` when it has none or went back into the
+/// queue. With `measure`, it was queued without the distance term, which only adds: it is ranked
+/// with the term now and put back unless it still comes first (the result is the greedy order of
+/// the full costs, at one measurement per candidate that reaches the top).
+#[inline]
+fn candidate_at_top(state: &State, heap: &mut TieredQueue, entry: &QueueEntry, measure: bool) -> Option<Candidate> {
+    let (a, b) = (entry.a(), entry.b & !GUARDED);
+    if !measure {
+        return state.evaluate(a, b);
+    }
+    let (key, choice) = state.guarded_key(a, b)?;
+    let guarded = QueueEntry::new(key, a, b | GUARDED, entry.stamp);
+    if heap.top(|e: &QueueEntry| state.is_current(e)).is_some_and(|top| top.rank() < guarded.rank()) {
+        heap.push(guarded);
+        return None;
+    }
+    Some(state.candidate(a, b, choice))
 }
 
 /// A new pass: queues again every edge that a collapse came near after its last refusal
