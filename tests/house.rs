@@ -72,12 +72,10 @@ fn functions(text: &str) -> Vec<(String, usize)> {
 
 /// Library functions still over 100 lines, as `file:function`: each is to be split into steps,
 /// and the list only shrinks (a function split must leave it, a new long one fails).
-const STILL_LONG: [&str; 5] = [
+const STILL_LONG: [&str; 3] = [
     "engine/src/io/gltf/read.rs:read",
     "engine/src/io/gltf/read.rs:read_primitive",
     "engine/src/io/gltf/write.rs:write_gltf_with",
-    "engine/src/io/ply.rs:read_ply",
-    "engine/src/simplify/run.rs:run",
 ];
 
 #[test]

@@ -8,8 +8,7 @@
 
 use crate::prefetch::prefetch;
 
-/// "No vertex / no face".
-const NONE: u32 = u32::MAX;
+use crate::mesh::NONE;
 
 /// One face at a vertex `v`, read from `v` in the face's orientation: (v, next, prev). Fans carry
 /// the corners so that the hot checks (link condition, folds, neighbour rings) never look up the

@@ -72,8 +72,13 @@ pub struct CornerAttributes {
     pub library: Option<std::sync::Arc<MaterialLibrary>>,
 }
 
-/// The material value of a face that has none (glTF's default material).
-pub const NO_MATERIAL: u32 = u32::MAX;
+/// No vertex, face, edge, corner or value: the one sentinel of the engine's `u32` index arrays
+/// (an absent `vl` or `vr` of a vertex split, a face corner outside the edge table, an empty slot).
+pub const NONE: u32 = u32::MAX;
+
+/// The material value of a face that has none (glTF's default material): [`NONE`] as a material
+/// number.
+pub const NO_MATERIAL: u32 = NONE;
 
 /// Scales a vertex's skin weights to sum to 1, as glTF requires (negative ones taken as 0): the
 /// sum taken in order in single precision, as the Khronos validator takes it, is then 1 within its

@@ -116,8 +116,8 @@ pub(crate) struct AttributeLog<'a> {
     pub journal_ends: &'a [u32],
 }
 
-/// Marks an absent `vl` or `vr` (the collapsed edge was on a boundary).
-pub const NO_VERTEX: u32 = u32::MAX;
+/// Marks an absent `vl` or `vr` (the collapsed edge was on a boundary): [`crate::mesh::NONE`].
+pub use crate::mesh::NONE as NO_VERTEX;
 
 /// One edge collapse as the simplifier logs it (indices of the simplifier's prepared mesh).
 #[derive(Debug, Clone, Copy)]

@@ -49,8 +49,9 @@ impl<T: Copy> Csr<T> {
     }
 }
 
-/// Marks a face corner whose edge is not part of the edge table (the face repeats a vertex).
-pub const NO_EDGE: u32 = u32::MAX;
+/// Marks a face corner whose edge is not part of the edge table (the face repeats a vertex):
+/// [`crate::mesh::NONE`].
+pub use crate::mesh::NONE as NO_EDGE;
 
 /// Edge and incidence tables of a mesh.
 #[derive(Debug, Clone)]
@@ -153,7 +154,7 @@ impl Mesh {
     /// the order kept); per-corner attributes are untouched.
     /// Returns the number of vertices joined away.
     pub fn join_cut_seams(&mut self) -> usize {
-        const NONE: u32 = u32::MAX;
+        use crate::mesh::NONE;
         let n = self.positions.len();
         // Each vertex's place: the first vertex at its position.
         let place = self.first_at_each_position();

@@ -293,59 +293,14 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
             let could_hold = body.len() / element.properties.len().max(1);
             positions.reserve((element.count as usize).min(could_hold));
         }
-        let index_list = if is_face {
-            let by_name = element.properties.iter().position(
-                |p| matches!(p, Property::List { name, .. } if name == "vertex_indices" || name == "vertex_index"),
-            );
-            let any_list = element.properties.iter().position(|p| matches!(p, Property::List { .. }));
-            let slot = by_name
-                .or(any_list)
-                .ok_or_else(|| MeshError::parse(path, "header", "face element has no list of vertex indices"))?;
-            face_list_seen = true;
-            Some(slot)
-        } else {
-            None
-        };
+        let index_list = if is_face { Some(face_list_slot(element, path)?) } else { None };
+        face_list_seen |= is_face;
         for i in 0..element.count {
             limits.check_cancel()?;
             let loc = |k: u64| format!("{} {k}", element.name);
-            let mut xyz = [0f64; 3];
-            let (mut normal, mut uv, mut color) = ([0f32; 3], [0f32; 2], [0f32, 0.0, 0.0, 1.0]);
-            let mut indices: Vec<i64> = Vec::new();
-            for (k, property) in element.properties.iter().enumerate() {
-                match property {
-                    Property::Scalar { kind, .. } => {
-                        let v = source.next_value(*kind).map_err(|r| MeshError::parse(path, loc(i), r))?;
-                        if let Some(axis) = xyz_slots.iter().position(|&s| s == k) {
-                            xyz[axis] = v;
-                        } else if let Some(axis) = normal_slots.iter().position(|&s| s == k) {
-                            normal[axis] = v as f32;
-                        } else if let Some(axis) = uv_slots.iter().position(|&s| s == k) {
-                            uv[axis] = v as f32;
-                        } else if let Some(channel) = color_slots.iter().position(|&s| s == k) {
-                            // Integer channels span their type's range; float channels are [0, 1].
-                            color[channel] = match kind {
-                                Scalar::U8 => (v / 255.0) as f32,
-                                Scalar::U16 => (v / 65535.0) as f32,
-                                _ => v as f32,
-                            };
-                        }
-                    }
-                    Property::List { count, item, .. } => {
-                        let n = source.next_value(*count).map_err(|r| MeshError::parse(path, loc(i), r))?;
-                        if n < 0.0 {
-                            return Err(MeshError::parse(path, loc(i), format!("negative list length {n}")));
-                        }
-                        let keep = index_list == Some(k);
-                        for _ in 0..n as u64 {
-                            let v = source.next_value(*item).map_err(|r| MeshError::parse(path, loc(i), r))?;
-                            if keep {
-                                indices.push(v as i64);
-                            }
-                        }
-                    }
-                }
-            }
+            let slots = (xyz_slots, normal_slots, uv_slots, color_slots);
+            let (xyz, normal, uv, color, indices) = read_values(source.as_mut(), element, slots, index_list)
+                .map_err(|r| MeshError::parse(path, loc(i), r))?;
             source.end_element().map_err(|r| MeshError::parse(path, loc(i), r))?;
             if is_vertex {
                 let p = [xyz[0] as f32, xyz[1] as f32, xyz[2] as f32];
@@ -381,8 +336,84 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
         // algorithms refuse it with an "empty mesh" error.
     }
 
-    let vertex_count = positions.len();
     let triangles = triangles_of(&polygons, &positions, path, limits)?;
+    let mesh = with_corner_values(positions, triangles, normals, uvs, colors);
+    mesh.check()?;
+    Ok(mesh)
+}
+
+/// The slot of a face element's list of vertex indices: `vertex_indices` (or `vertex_index`),
+/// else its first list.
+fn face_list_slot(element: &Element, path: &Path) -> Result<usize, MeshError> {
+    let by_name = element
+        .properties
+        .iter()
+        .position(|p| matches!(p, Property::List { name, .. } if name == "vertex_indices" || name == "vertex_index"));
+    let any_list = element.properties.iter().position(|p| matches!(p, Property::List { .. }));
+    by_name.or(any_list).ok_or_else(|| MeshError::parse(path, "header", "face element has no list of vertex indices"))
+}
+
+/// One element's values and what a vertex or face keeps of them: position, normal, texture
+/// coordinate and colour (by their `slots`), and the vertex indices of the list at `index_list`.
+type ElementValues = ([f64; 3], [f32; 3], [f32; 2], [f32; 4], Vec<i64>);
+
+/// Reads one element's values from `source`.
+fn read_values(
+    source: &mut dyn ValueSource,
+    element: &Element,
+    (xyz_slots, normal_slots, uv_slots, color_slots): ([usize; 3], [usize; 3], [usize; 2], [usize; 4]),
+    index_list: Option<usize>,
+) -> Result<ElementValues, String> {
+    let mut xyz = [0f64; 3];
+    let (mut normal, mut uv, mut color) = ([0f32; 3], [0f32; 2], [0f32, 0.0, 0.0, 1.0]);
+    let mut indices: Vec<i64> = Vec::new();
+    for (k, property) in element.properties.iter().enumerate() {
+        match property {
+            Property::Scalar { kind, .. } => {
+                let v = source.next_value(*kind)?;
+                if let Some(axis) = xyz_slots.iter().position(|&s| s == k) {
+                    xyz[axis] = v;
+                } else if let Some(axis) = normal_slots.iter().position(|&s| s == k) {
+                    normal[axis] = v as f32;
+                } else if let Some(axis) = uv_slots.iter().position(|&s| s == k) {
+                    uv[axis] = v as f32;
+                } else if let Some(channel) = color_slots.iter().position(|&s| s == k) {
+                    // Integer channels span their type's range; float channels are [0, 1].
+                    color[channel] = match kind {
+                        Scalar::U8 => (v / 255.0) as f32,
+                        Scalar::U16 => (v / 65535.0) as f32,
+                        _ => v as f32,
+                    };
+                }
+            }
+            Property::List { count, item, .. } => {
+                let n = source.next_value(*count)?;
+                if n < 0.0 {
+                    return Err(format!("negative list length {n}"));
+                }
+                let keep = index_list == Some(k);
+                for _ in 0..n as u64 {
+                    let v = source.next_value(*item)?;
+                    if keep {
+                        indices.push(v as i64);
+                    }
+                }
+            }
+        }
+    }
+    Ok((xyz, normal, uv, color, indices))
+}
+
+/// The mesh with its per-vertex values as per-corner values: a PLY vertex has one of each. Seams
+/// (two vertices at one position) are joined again.
+fn with_corner_values(
+    positions: Vec<[f32; 3]>,
+    triangles: Vec<[u32; 3]>,
+    normals: Vec<[f32; 3]>,
+    uvs: Vec<[f32; 2]>,
+    colors: Vec<[f32; 4]>,
+) -> Mesh {
+    let vertex_count = positions.len();
     // Per-vertex values become per-corner values: a PLY vertex has one of each.
     fn per_corner<T: Copy>(per_vertex: Vec<T>, vertex_count: usize, triangles: &[[u32; 3]]) -> Option<Vec<T>> {
         (per_vertex.len() == vertex_count && vertex_count > 0)
@@ -400,8 +431,7 @@ pub fn read_ply(bytes: &[u8], path: &Path, limits: &ReadLimits) -> Result<Mesh, 
         // seam is a seam (see `Mesh::join_cut_seams`), as the writer's split round-trips.
         mesh.join_cut_seams();
     }
-    mesh.check()?;
-    Ok(mesh)
+    mesh
 }
 
 /// Refuses counts that the bytes after the header (`body_len`) cannot hold, and counts over the

@@ -296,7 +296,7 @@ fn decode_base(
 }
 
 /// A corner not given its value yet.
-const UNSET: u32 = u32::MAX;
+const UNSET: u32 = crate::mesh::NONE;
 
 /// What a value is made of, as grid integers: octahedral normal, texture coordinates, colour,
 /// material (−1 for none), the four joints and the four weights (in 255ths summing to 255, as a

@@ -184,16 +184,21 @@ pub(super) fn run(
         log.push(record);
         collapses_this_pass += 1;
         rank_again(state, candidate.survivor, opposite, hole, with_attributes, &mut heap, &mut neighbours);
-        // The queue's refills drop the stale entries they pass over; where its heap takes most
-        // pushes (refills then come seldom: fandisk's planar regions) they pile up instead. A mesh
-        // has about 1.5 edges per face, so once the queue holds more than 2 entries per face a
-        // quarter or more are stale: one linear sweep drops them.
-        if heap.len() > 2 * live {
-            heap.sweep(|e| state.is_current(e));
-        }
+        sweep_when_stale(state, &mut heap, live);
     };
     let parts_removed = parts.map_or(0, |p| p.removed);
     Ok(Run { log, stop_reason, refused, max_collapse_error, parts_removed })
+}
+
+/// The queue's refills drop the stale entries they pass over; where its heap takes most pushes
+/// (refills then come seldom: large planar regions) they pile up instead. A mesh has about 1.5
+/// edges per face, so once the queue holds more than 2 entries per face (of `live`) a quarter or
+/// more are stale: one linear sweep drops them.
+#[inline]
+fn sweep_when_stale(state: &State, heap: &mut TieredQueue, live: usize) {
+    if heap.len() > 2 * live {
+        heap.sweep(|e| state.is_current(e));
+    }
 }
 
 /// The face count (of the state's faces alive, `live` at the start) from which the distance term

@@ -11,8 +11,7 @@ use crate::quadric::Quadric;
 /// below this (a fold of more than ~154°).
 pub const FOLD_DOT: f64 = -0.9;
 
-/// No vertex, face, corner or slot: the one sentinel of the simplifier's index arrays.
-pub(crate) const NONE: u32 = u32::MAX;
+pub(crate) use crate::mesh::NONE;
 
 /// A position as the run computes with it.
 #[inline]
