@@ -109,12 +109,69 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
         .map_err(|e| err("document", e.to_string()))?;
     let document = &gltf.document;
 
+    let buffers = load_buffers(document, gltf.blob.as_ref(), folder, path)?;
+    let mut instances = mesh_instances(document, path)?;
+    // A skinned asset keeps its skeleton when every instance is drawn with one skin (a character):
+    // its vertices are then in the skin's bind space, where glTF places them (the node's own
+    // transform is ignored), and carry their joints and weights.
+    let skin_of = |node: usize| document.nodes().nth(node).and_then(|n| n.skin()).map(|s| s.index());
+    let rigged = match instances.first() {
+        Some(&(_, _, node)) => {
+            skin_of(node).filter(|&s| instances.iter().all(|&(_, _, n)| skin_of(n) == Some(s))).map(|_| node)
+        }
+        None => None,
+    };
+    let rig = match rigged {
+        Some(node) => Some(rig(&raw_json(json).map_err(|r| err("document", r))?, document, &buffers, node)),
+        None => None,
+    };
+    let (rig, rig_refused) = match rig {
+        Some(Ok(rig)) => (Some(rig), None),
+        Some(Err(reason)) => (None, Some(reason)),
+        None => (None, None),
+    };
+    if rig.is_some() {
+        instances.iter_mut().for_each(|i| i.1 = DMat4::IDENTITY);
+    }
+    let joint_count = rig.as_ref().map_or(0, crate::mesh::Rig::joint_count);
+    let library =
+        library(json, document, &buffers, folder, rig, rig_refused).map_err(|(at, reason)| err(&at, reason))?;
+
+    check_counts(&instances, limits, path)?;
+
+    let mut parts = Vec::new();
+    for (mesh, world, _) in &instances {
+        for primitive in mesh.primitives().filter(|p| is_surface(p.mode()) && drawn(p)) {
+            limits.check_cancel()?;
+            let at = format!("mesh {} primitive {}", mesh.index(), primitive.index());
+            // The checks above make the reads in range; a panic in the crate would still be a bug
+            // of this reader, reported as one rather than taking the caller down.
+            let read = || read_primitive(&primitive, &buffers, world, joint_count);
+            let part = std::panic::catch_unwind(std::panic::AssertUnwindSafe(read))
+                .map_err(|_| err(&at, "could not be read (malformed accessor data)".into()))?
+                .map_err(|reason| err(&at, reason))?;
+            parts.push(part);
+        }
+    }
+    let library = carry_other_primitives(&instances, library, json, document, &buffers, path)?;
+    merge(parts, library, path)
+}
+
+/// The document's buffers (the GLB's binary chunk `blob`, data URIs, or files in `folder`), each
+/// checked to hold what it declares, and every buffer view and accessor checked to lie within them.
+fn load_buffers(
+    document: &gltf::Document,
+    blob: Option<&Vec<u8>>,
+    folder: Option<&Path>,
+    path: &Path,
+) -> Result<Vec<Vec<u8>>, MeshError> {
+    let err = |at: &str, reason: String| MeshError::parse(path, at, reason);
     let mut buffers: Vec<Vec<u8>> = Vec::new();
     for buffer in document.buffers() {
         let at = format!("buffer {}", buffer.index());
         let data = match buffer.source() {
             gltf::buffer::Source::Bin => {
-                gltf.blob.clone().ok_or_else(|| err(&at, "refers to the GLB binary chunk, which is missing".into()))?
+                blob.cloned().ok_or_else(|| err(&at, "refers to the GLB binary chunk, which is missing".into()))?
             }
             gltf::buffer::Source::Uri(uri) => {
                 if let Some(decoded) = data_uri(uri) {
@@ -153,7 +210,17 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
         checks::accessor(&accessor, &buffers)
             .map_err(|reason| err(&format!("accessor {}", accessor.index()), reason))?;
     }
-    // Mesh instances with their world transforms and the node that draws them.
+    Ok(buffers)
+}
+
+/// Mesh instances with their world transforms and the node that draws them: the default scene's
+/// (else the first scene's), or every mesh once without a scene.
+#[allow(clippy::type_complexity)]
+fn mesh_instances<'d>(
+    document: &'d gltf::Document,
+    path: &Path,
+) -> Result<Vec<(gltf::Mesh<'d>, DMat4, usize)>, MeshError> {
+    let err = |at: &str, reason: String| MeshError::parse(path, at, reason);
     let mut instances: Vec<(gltf::Mesh, DMat4, usize)> = Vec::new();
     let scene = document.default_scene().or_else(|| document.scenes().next());
     match scene {
@@ -175,35 +242,13 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
         }
         None => instances.extend(document.meshes().map(|m| (m, DMat4::IDENTITY, usize::MAX))),
     }
-    // A skinned asset keeps its skeleton when every instance is drawn with one skin (a character):
-    // its vertices are then in the skin's bind space, where glTF places them (the node's own
-    // transform is ignored), and carry their joints and weights.
-    let skin_of = |node: usize| document.nodes().nth(node).and_then(|n| n.skin()).map(|s| s.index());
-    let rigged = match instances.first() {
-        Some(&(_, _, node)) => {
-            skin_of(node).filter(|&s| instances.iter().all(|&(_, _, n)| skin_of(n) == Some(s))).map(|_| node)
-        }
-        None => None,
-    };
-    let rig = match rigged {
-        Some(node) => Some(rig(&raw_json(json).map_err(|r| err("document", r))?, document, &buffers, node)),
-        None => None,
-    };
-    let (rig, rig_refused) = match rig {
-        Some(Ok(rig)) => (Some(rig), None),
-        Some(Err(reason)) => (None, Some(reason)),
-        None => (None, None),
-    };
-    if rig.is_some() {
-        instances.iter_mut().for_each(|i| i.1 = DMat4::IDENTITY);
-    }
-    let joint_count = rig.as_ref().map_or(0, crate::mesh::Rig::joint_count);
-    let library =
-        library(json, document, &buffers, folder, rig, rig_refused).map_err(|(at, reason)| err(&at, reason))?;
+    Ok(instances)
+}
 
-    // Counts first, against the limits, before reading any data.
+/// The instances' vertex and face counts against the limits, before any data is read.
+fn check_counts(instances: &[(gltf::Mesh, DMat4, usize)], limits: &ReadLimits, path: &Path) -> Result<(), MeshError> {
     let (mut vertices, mut corners) = (0u64, 0u64);
-    for (mesh, _, _) in &instances {
+    for (mesh, _, _) in instances {
         for primitive in mesh.primitives() {
             let Some(positions) = primitive.get(&gltf::Semantic::Positions) else { continue };
             vertices += positions.count() as u64;
@@ -214,27 +259,23 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
     }
     limits.check_vertices(vertices, path)?;
     limits.check_faces(corners / 3, path)?;
+    Ok(())
+}
 
-    let mut parts = Vec::new();
-    for (mesh, world, _) in &instances {
-        for primitive in mesh.primitives().filter(|p| is_surface(p.mode()) && drawn(p)) {
-            limits.check_cancel()?;
-            let at = format!("mesh {} primitive {}", mesh.index(), primitive.index());
-            // The checks above make the reads in range; a panic in the crate would still be a bug
-            // of this reader, reported as one rather than taking the caller down.
-            let read = || read_primitive(&primitive, &buffers, world, joint_count);
-            let part = std::panic::catch_unwind(std::panic::AssertUnwindSafe(read))
-                .map_err(|_| err(&at, "could not be read (malformed accessor data)".into()))?
-                .map_err(|reason| err(&at, reason))?;
-            parts.push(part);
-        }
-    }
-    // Point and line primitives, carried as they were; not beside a skin, whose node would move
-    // them with joints they do not have.
-    let mut library = library;
+/// The instances' point and line primitives, carried as they were in `library`; not beside a
+/// skin, whose node would move them with joints they do not have (said instead).
+fn carry_other_primitives(
+    instances: &[(gltf::Mesh, DMat4, usize)],
+    mut library: MaterialLibrary,
+    json: &[u8],
+    document: &gltf::Document,
+    buffers: &[Vec<u8>],
+    path: &Path,
+) -> Result<MaterialLibrary, MeshError> {
+    let err = |at: &str, reason: String| MeshError::parse(path, at, reason);
     // (The document's JSON, parsed again only for a primitive to carry.)
     let mut raw = None;
-    for (mesh, world, _) in &instances {
+    for (mesh, world, _) in instances {
         for primitive in mesh.primitives().filter(|p| !is_surface(p.mode()) && drawn(p)) {
             let at = format!("mesh {} primitive {}", mesh.index(), primitive.index());
             let beside_a_skin = "point and line primitives (beside a skin)";
@@ -248,14 +289,14 @@ fn read(bytes: &[u8], path: &Path, folder: Option<&Path>, limits: &ReadLimits) -
                 Some(raw) => raw,
                 None => raw.insert(raw_json(json).map_err(|reason| err("document", reason))?),
             };
-            let read = || super::passthrough::read(&primitive, raw, document, &buffers, world);
+            let read = || super::passthrough::read(&primitive, raw, document, buffers, world);
             let other = std::panic::catch_unwind(std::panic::AssertUnwindSafe(read))
                 .map_err(|_| err(&at, "could not be read (malformed accessor data)".into()))?
                 .map_err(|reason| err(&at, reason))?;
             library.other_primitives.push(other);
         }
     }
-    merge(parts, library, path)
+    Ok(library)
 }
 
 /// The document's materials, textures, samplers and images, for a glTF written from the mesh.
@@ -507,20 +548,7 @@ fn read_primitive(
     if let Some(&bad) = indices.iter().find(|&&i| i as usize >= n) {
         return Err(format!("index {bad} is out of range ({n} vertices)"));
     }
-    let mut triangles: Vec<[u32; 3]> = match primitive.mode() {
-        Mode::TriangleStrip => indices
-            .windows(3)
-            .enumerate()
-            .map(|(k, w)| if k % 2 == 0 { [w[0], w[1], w[2]] } else { [w[1], w[0], w[2]] })
-            .collect(),
-        Mode::TriangleFan => indices.windows(2).skip(1).map(|w| [indices[0], w[0], w[1]]).collect(),
-        _ => {
-            if !indices.len().is_multiple_of(3) {
-                return Err(format!("{} indices: not a whole number of triangles", indices.len()));
-            }
-            indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
-        }
-    };
+    let mut triangles = triangles_of(primitive.mode(), &indices)?;
     let same_count = |what: &str, got: usize| -> Result<(), String> {
         if got == n { Ok(()) } else { Err(format!("{what} has {got} values for {n} positions")) }
     };
@@ -553,34 +581,12 @@ fn read_primitive(
         same_count("COLOR_0", v.len())?;
         finite("COLOR_0", v)?;
     }
-    let (mut joints, mut weights, mut mended) = (None, None, 0);
-    if joint_count > 0 {
-        joints = reader.read_joints(0).map(|r| r.into_u16().collect::<Vec<[u16; 4]>>());
-        weights = reader.read_weights(0).map(|r| r.into_f32().collect::<Vec<[f32; 4]>>());
-        if let (Some(j), Some(w)) = (&mut joints, &mut weights) {
-            finite("WEIGHTS_0", w)?;
-            // Weights that do not sum to 1 (invalid glTF) are scaled to, a negative one taken as 0.
-            mended = w.iter_mut().map(|w| crate::mesh::normalize_weights(w) as usize).sum();
-            // A joint of weight zero moves nothing: it is read as joint 0, as glTF asks unused
-            // entries to be, so that it neither splits a vertex nor draws a validator warning.
-            for (j, w) in j.iter_mut().zip(w.iter()) {
-                for k in 0..4 {
-                    if w[k] == 0.0 {
-                        j[k] = 0;
-                    }
-                }
-            }
-            same_count("JOINTS_0", j.len())?;
-            same_count("WEIGHTS_0", w.len())?;
-            if let Some((vertex, bad)) =
-                j.iter().enumerate().find_map(|(i, j)| j.iter().find(|&&x| x as usize >= joint_count).map(|&x| (i, x)))
-            {
-                return Err(format!("JOINTS_0 of vertex {vertex} names joint {bad}; the skin has {joint_count}"));
-            }
-        } else {
-            (joints, weights) = (None, None);
-        }
-    }
+    let (joints, weights, mended) = if joint_count > 0 {
+        let joints = reader.read_joints(0).map(|r| r.into_u16().collect());
+        skin_of(joints, reader.read_weights(0).map(|r| r.into_f32().collect()), n, joint_count)?
+    } else {
+        (None, None, 0)
+    };
     // Placed in the world; normals by the inverse transpose; a mirror flips the winding back.
     let linear = DMat3::from_mat4(*world);
     let normal_matrix = linear.inverse().transpose();
@@ -620,6 +626,64 @@ fn read_primitive(
     let weights = weights.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let material = primitive.material().index().map_or(NO_MATERIAL, |m| m as u32);
     Ok(Part { positions, triangles, normals, tangents, uvs, uvs1, colors, joints, weights, material, mended })
+}
+
+/// The triangles of a surface primitive's `indices` in its `mode` (strips and fans unrolled).
+fn triangles_of(mode: Mode, indices: &[u32]) -> Result<Vec<[u32; 3]>, String> {
+    Ok(match mode {
+        Mode::TriangleStrip => indices
+            .windows(3)
+            .enumerate()
+            .map(|(k, w)| if k % 2 == 0 { [w[0], w[1], w[2]] } else { [w[1], w[0], w[2]] })
+            .collect(),
+        Mode::TriangleFan => indices.windows(2).skip(1).map(|w| [indices[0], w[0], w[1]]).collect(),
+        _ => {
+            if !indices.len().is_multiple_of(3) {
+                return Err(format!("{} indices: not a whole number of triangles", indices.len()));
+            }
+            indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+        }
+    })
+}
+
+/// A skinned primitive's JOINTS_0 and WEIGHTS_0 as read (both kept, or neither) for its `n`
+/// vertices: weights mended to sum to 1, a joint of weight zero read as joint 0, each joint
+/// checked against the skin's `joint_count`, and how many vertices' weights had to be mended.
+#[allow(clippy::type_complexity)]
+fn skin_of(
+    mut joints: Option<Vec<[u16; 4]>>,
+    mut weights: Option<Vec<[f32; 4]>>,
+    n: usize,
+    joint_count: usize,
+) -> Result<(Option<Vec<[u16; 4]>>, Option<Vec<[f32; 4]>>, usize), String> {
+    let same_count = |what: &str, got: usize| -> Result<(), String> {
+        if got == n { Ok(()) } else { Err(format!("{what} has {got} values for {n} positions")) }
+    };
+    let mut mended = 0;
+    if let (Some(j), Some(w)) = (&mut joints, &mut weights) {
+        finite("WEIGHTS_0", w)?;
+        // Weights that do not sum to 1 (invalid glTF) are scaled to, a negative one taken as 0.
+        mended = w.iter_mut().map(|w| crate::mesh::normalize_weights(w) as usize).sum();
+        // A joint of weight zero moves nothing: it is read as joint 0, as glTF asks unused
+        // entries to be, so that it neither splits a vertex nor draws a validator warning.
+        for (j, w) in j.iter_mut().zip(w.iter()) {
+            for k in 0..4 {
+                if w[k] == 0.0 {
+                    j[k] = 0;
+                }
+            }
+        }
+        same_count("JOINTS_0", j.len())?;
+        same_count("WEIGHTS_0", w.len())?;
+        if let Some((vertex, bad)) =
+            j.iter().enumerate().find_map(|(i, j)| j.iter().find(|&&x| x as usize >= joint_count).map(|&x| (i, x)))
+        {
+            return Err(format!("JOINTS_0 of vertex {vertex} names joint {bad}; the skin has {joint_count}"));
+        }
+    } else {
+        (joints, weights) = (None, None);
+    }
+    Ok((joints, weights, mended))
 }
 
 /// Joins the parts into one mesh. Texture coordinates and colours are kept when some part has

@@ -28,7 +28,7 @@ use serde_json::{Value, json};
 use super::accessor::{bounds, floats};
 use crate::io::files::{read_referenced, relative_uri, sniff_image};
 use crate::io::options::WriteOptions;
-use crate::mesh::{ImageSource, MaterialLibrary, Mesh, NO_MATERIAL, OtherPrimitive};
+use crate::mesh::{CornerAttributes, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL, OtherPrimitive};
 
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
@@ -127,7 +127,7 @@ pub fn write_gltf(out: impl Write, mesh: &Mesh, binary: bool, folder: Option<&Pa
 
 /// [`write_gltf`] with the [`WriteOptions`] (quantized vertex data, see the module documentation).
 pub fn write_gltf_with(
-    mut out: impl Write,
+    out: impl Write,
     mesh: &Mesh,
     binary: bool,
     folder: Option<&Path>,
@@ -170,131 +170,12 @@ pub fn write_gltf_with(
     accessors.push(position);
     attributes.insert("POSITION".into(), json!(accessors.len() - 1));
 
-    // A corner's values (wedges come from corners unless there are no attributes at all).
-    let mut add = |name: &str, kind: &str, stored: Stored| {
-        let view = match stored.stride {
-            Some(stride) => buffer.strided(&stored.bytes, stride),
-            None => buffer.view(&stored.bytes, Some(ARRAY_BUFFER)),
-        };
-        let mut accessor =
-            json!({ "bufferView": view, "componentType": stored.component, "count": count, "type": kind });
-        if stored.normalized {
-            accessor["normalized"] = json!(true);
-        }
-        accessors.push(accessor);
-        attributes.insert(name.into(), json!(accessors.len() - 1));
-    };
-    if let Some(normals) = &corners.normals {
-        let values = (0..count).map(|i| unit(normals[wedges.source[i]]));
-        let stored = if quantize {
-            quantized = true;
-            // Each element padded to 4 bytes, as glTF aligns vertex attributes.
-            let bytes = values.flat_map(|n| [snorm8(n[0]), snorm8(n[1]), snorm8(n[2]), 0]).collect();
-            Stored { bytes, component: BYTE, normalized: true, stride: Some(4) }
-        } else {
-            Stored::floats(values)
-        };
-        add("NORMAL", "VEC3", stored);
-    }
-    if let Some(tangents) = &corners.tangents {
-        let values = (0..count).map(|i| {
-            let t = tangents[wedges.source[i]];
-            let [x, y, z] = unit([t[0], t[1], t[2]]);
-            [x, y, z, if t[3] < 0.0 { -1.0 } else { 1.0 }]
-        });
-        let stored = if quantize {
-            quantized = true;
-            Stored {
-                bytes: values.flat_map(|t| t.map(snorm8)).collect(),
-                component: BYTE,
-                normalized: true,
-                stride: None,
-            }
-        } else {
-            Stored::floats(values)
-        };
-        add("TANGENT", "VEC4", stored);
-    }
-    for (name, uvs) in [("TEXCOORD_0", corners.uvs_with_origin(true)), ("TEXCOORD_1", corners.uvs1_with_origin(true))] {
-        let Some(uvs) = uvs else { continue };
-        let values = || (0..count).map(|i| uvs[wedges.source[i]]);
-        // Normalised integers hold [0, 1] (unsigned) or [-1, 1] (signed, at half the precision):
-        // a repeating texture's coordinates stay float.
-        let within = |range: std::ops::RangeInclusive<f32>| values().flatten().all(|c| range.contains(&c));
-        let integers = |component: u32, encode: fn(f32) -> [u8; 2]| {
-            let bytes = values().flatten().flat_map(encode).collect();
-            Stored { bytes, component, normalized: true, stride: None }
-        };
-        let stored = match quantize {
-            true if within(0.0..=1.0) => integers(UNSIGNED_SHORT, unorm16),
-            true if within(-1.0..=1.0) => integers(SHORT, snorm16),
-            _ => Stored::floats(values()),
-        };
-        quantized |= stored.component != FLOAT;
-        add(name, "VEC2", stored);
-    }
-    if let Some(colors) = &corners.colors {
-        let values = (0..count).map(|i| colors[wedges.source[i]].map(|c| c.clamp(0.0, 1.0)));
-        let stored = if quantize {
-            let bytes = values.flat_map(|c| c.map(unorm16)).flatten().collect();
-            Stored { bytes, component: UNSIGNED_SHORT, normalized: true, stride: None }
-        } else {
-            Stored::floats(values)
-        };
-        add("COLOR_0", "VEC4", stored);
-    }
-    if let (Some(joints), Some(weights)) = (&corners.joints, &corners.weights) {
-        let bytes = (0..count).flat_map(|i| joints[wedges.source[i]].into_iter().flat_map(u16::to_le_bytes)).collect();
-        add("JOINTS_0", "VEC4", Stored { bytes, component: UNSIGNED_SHORT, normalized: false, stride: None });
-        add("WEIGHTS_0", "VEC4", Stored::floats((0..count).map(|i| weights[wedges.source[i]])));
-    }
+    let mut vertices =
+        VertexAccessors { buffer: &mut buffer, accessors: &mut accessors, attributes: &mut attributes, count };
+    quantized |= vertices.add_corner_values(corners, &wedges.source, quantize);
 
-    // One primitive per material, in the order materials first appear; indices in one view.
-    let material_of = |f: usize| corners.materials.as_ref().map_or(NO_MATERIAL, |m| m[3 * f]);
-    let mut groups: Vec<(u32, Vec<usize>)> = Vec::new();
-    let mut group_of: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
-    for f in 0..mesh.face_count() {
-        let m = material_of(f);
-        let g = *group_of.entry(m).or_insert_with(|| {
-            groups.push((m, Vec::new()));
-            groups.len() - 1
-        });
-        groups[g].1.push(f);
-    }
-    // 0xFFFF is a primitive-restart value for 16-bit indices: 32-bit from there.
-    let wide = count >= 0xFFFF;
-    let mut index_bytes = Vec::new();
-    let mut primitives = Vec::new();
-    let mut index_accessors = Vec::new();
-    for (material, faces) in &groups {
-        let offset = index_bytes.len();
-        for &f in faces {
-            for k in 0..3 {
-                let v = wedges.corner_vertex[3 * f + k];
-                if wide {
-                    index_bytes.extend_from_slice(&v.to_le_bytes());
-                } else {
-                    index_bytes.extend_from_slice(&(v as u16).to_le_bytes());
-                }
-            }
-        }
-        index_accessors.push((offset, 3 * faces.len()));
-        let mut primitive = json!({ "attributes": attributes.clone(), "mode": 4 });
-        if *material != NO_MATERIAL {
-            primitive["material"] = json!(material);
-        }
-        primitives.push(primitive);
-    }
-    if !index_bytes.is_empty() {
-        let view = buffer.view(&index_bytes, Some(ELEMENT_ARRAY_BUFFER));
-        for ((offset, n), primitive) in index_accessors.into_iter().zip(&mut primitives) {
-            let component = if wide { UNSIGNED_INT } else { UNSIGNED_SHORT };
-            accessors.push(
-                json!({ "bufferView": view, "byteOffset": offset, "componentType": component, "count": n, "type": "SCALAR" }),
-            );
-            primitive["indices"] = json!(accessors.len() - 1);
-        }
-    }
+    let mut primitives =
+        primitives_by_material(mesh, &wedges.corner_vertex, count, &attributes, &mut accessors, &mut buffer);
 
     if let Some(library) = &corners.library {
         add_other_primitives(&library.other_primitives, grid, &mut primitives, &mut accessors, &mut buffer);
@@ -329,6 +210,173 @@ pub fn write_gltf_with(
             }
         }
     }
+    emit(out, document, buffer, binary)
+}
+
+/// The vertex attributes' accessors as they are added: their data into `buffer`, their JSON into
+/// `accessors`, their names into the primitives' `attributes`; `count` vertices each.
+struct VertexAccessors<'a> {
+    buffer: &'a mut Buffer,
+    accessors: &'a mut Vec<Value>,
+    attributes: &'a mut serde_json::Map<String, Value>,
+    count: usize,
+}
+
+impl VertexAccessors<'_> {
+    /// One attribute, `name`, of glTF type `kind`, stored as `stored` says.
+    fn add(&mut self, name: &str, kind: &str, stored: Stored) {
+        let view = match stored.stride {
+            Some(stride) => self.buffer.strided(&stored.bytes, stride),
+            None => self.buffer.view(&stored.bytes, Some(ARRAY_BUFFER)),
+        };
+        let mut accessor =
+            json!({ "bufferView": view, "componentType": stored.component, "count": self.count, "type": kind });
+        if stored.normalized {
+            accessor["normalized"] = json!(true);
+        }
+        self.accessors.push(accessor);
+        self.attributes.insert(name.into(), json!(self.accessors.len() - 1));
+    }
+
+    /// The corners' values (normals, tangents, texture coordinates, colours, joints and weights),
+    /// each vertex taking those of its corner `source`; with `quantize` as integers where glTF
+    /// allows. Whether any is stored as KHR_mesh_quantization's integer types.
+    fn add_corner_values(&mut self, corners: &CornerAttributes, source: &[usize], quantize: bool) -> bool {
+        let mut quantized = false;
+        if let Some(normals) = &corners.normals {
+            let values = (0..self.count).map(|i| unit(normals[source[i]]));
+            let stored = if quantize {
+                quantized = true;
+                // Each element padded to 4 bytes, as glTF aligns vertex attributes.
+                let bytes = values.flat_map(|n| [snorm8(n[0]), snorm8(n[1]), snorm8(n[2]), 0]).collect();
+                Stored { bytes, component: BYTE, normalized: true, stride: Some(4) }
+            } else {
+                Stored::floats(values)
+            };
+            self.add("NORMAL", "VEC3", stored);
+        }
+        if let Some(tangents) = &corners.tangents {
+            let values = (0..self.count).map(|i| {
+                let t = tangents[source[i]];
+                let [x, y, z] = unit([t[0], t[1], t[2]]);
+                [x, y, z, if t[3] < 0.0 { -1.0 } else { 1.0 }]
+            });
+            let stored = if quantize {
+                quantized = true;
+                Stored {
+                    bytes: values.flat_map(|t| t.map(snorm8)).collect(),
+                    component: BYTE,
+                    normalized: true,
+                    stride: None,
+                }
+            } else {
+                Stored::floats(values)
+            };
+            self.add("TANGENT", "VEC4", stored);
+        }
+        for (name, uvs) in
+            [("TEXCOORD_0", corners.uvs_with_origin(true)), ("TEXCOORD_1", corners.uvs1_with_origin(true))]
+        {
+            let Some(uvs) = uvs else { continue };
+            let values = || (0..self.count).map(|i| uvs[source[i]]);
+            // Normalised integers hold [0, 1] (unsigned) or [-1, 1] (signed, at half the precision):
+            // a repeating texture's coordinates stay float.
+            let within = |range: std::ops::RangeInclusive<f32>| values().flatten().all(|c| range.contains(&c));
+            let integers = |component: u32, encode: fn(f32) -> [u8; 2]| {
+                let bytes = values().flatten().flat_map(encode).collect();
+                Stored { bytes, component, normalized: true, stride: None }
+            };
+            let stored = match quantize {
+                true if within(0.0..=1.0) => integers(UNSIGNED_SHORT, unorm16),
+                true if within(-1.0..=1.0) => integers(SHORT, snorm16),
+                _ => Stored::floats(values()),
+            };
+            quantized |= stored.component != FLOAT;
+            self.add(name, "VEC2", stored);
+        }
+        if let Some(colors) = &corners.colors {
+            let values = (0..self.count).map(|i| colors[source[i]].map(|c| c.clamp(0.0, 1.0)));
+            let stored = if quantize {
+                let bytes = values.flat_map(|c| c.map(unorm16)).flatten().collect();
+                Stored { bytes, component: UNSIGNED_SHORT, normalized: true, stride: None }
+            } else {
+                Stored::floats(values)
+            };
+            self.add("COLOR_0", "VEC4", stored);
+        }
+        if let (Some(joints), Some(weights)) = (&corners.joints, &corners.weights) {
+            let bytes =
+                (0..self.count).flat_map(|i| joints[source[i]].into_iter().flat_map(u16::to_le_bytes)).collect();
+            self.add("JOINTS_0", "VEC4", Stored { bytes, component: UNSIGNED_SHORT, normalized: false, stride: None });
+            self.add("WEIGHTS_0", "VEC4", Stored::floats((0..self.count).map(|i| weights[source[i]])));
+        }
+        quantized
+    }
+}
+
+/// One primitive per material of `mesh`, in the order materials first appear, each with the
+/// vertex `attributes` and its indices (the corners' vertices, `corner_vertex`, of `count`), all
+/// indices in one view.
+fn primitives_by_material(
+    mesh: &Mesh,
+    corner_vertex: &[u32],
+    count: usize,
+    attributes: &serde_json::Map<String, Value>,
+    accessors: &mut Vec<Value>,
+    buffer: &mut Buffer,
+) -> Vec<Value> {
+    let corners = &mesh.corners;
+    let material_of = |f: usize| corners.materials.as_ref().map_or(NO_MATERIAL, |m| m[3 * f]);
+    let mut groups: Vec<(u32, Vec<usize>)> = Vec::new();
+    let mut group_of: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
+    for f in 0..mesh.face_count() {
+        let m = material_of(f);
+        let g = *group_of.entry(m).or_insert_with(|| {
+            groups.push((m, Vec::new()));
+            groups.len() - 1
+        });
+        groups[g].1.push(f);
+    }
+    // 0xFFFF is a primitive-restart value for 16-bit indices: 32-bit from there.
+    let wide = count >= 0xFFFF;
+    let mut index_bytes = Vec::new();
+    let mut primitives = Vec::new();
+    let mut index_accessors = Vec::new();
+    for (material, faces) in &groups {
+        let offset = index_bytes.len();
+        for &f in faces {
+            for k in 0..3 {
+                let v = corner_vertex[3 * f + k];
+                if wide {
+                    index_bytes.extend_from_slice(&v.to_le_bytes());
+                } else {
+                    index_bytes.extend_from_slice(&(v as u16).to_le_bytes());
+                }
+            }
+        }
+        index_accessors.push((offset, 3 * faces.len()));
+        let mut primitive = json!({ "attributes": attributes.clone(), "mode": 4 });
+        if *material != NO_MATERIAL {
+            primitive["material"] = json!(material);
+        }
+        primitives.push(primitive);
+    }
+    if !index_bytes.is_empty() {
+        let view = buffer.view(&index_bytes, Some(ELEMENT_ARRAY_BUFFER));
+        for ((offset, n), primitive) in index_accessors.into_iter().zip(&mut primitives) {
+            let component = if wide { UNSIGNED_INT } else { UNSIGNED_SHORT };
+            accessors.push(
+                json!({ "bufferView": view, "byteOffset": offset, "componentType": component, "count": n, "type": "SCALAR" }),
+            );
+            primitive["indices"] = json!(accessors.len() - 1);
+        }
+    }
+    primitives
+}
+
+/// Writes the document and its buffer: a GLB when `binary` (JSON and binary chunks, each padded
+/// to 4 bytes), else JSON with the buffer as a data URI.
+fn emit(mut out: impl Write, mut document: Value, buffer: Buffer, binary: bool) -> std::io::Result<()> {
     document["bufferViews"] = json!(buffer.views);
     let length = buffer.bytes.len();
     if binary {
