@@ -147,6 +147,12 @@ fn keep_is_the_fraction_kept_and_ratio_the_fraction_removed() {
     ok(&["convert", s(&input), s(&dir.join("b.ply"))]);
     assert_eq!(std::fs::read(dir.join("a.ply")).unwrap(), std::fs::read(dir.join("b.ply")).unwrap());
     fails_with(&["convert", s(&input)], "OUTPUT");
+    // The help's figures come from the engine's constants (one home each).
+    let help = String::from_utf8_lossy(&ok(&["simplify", "--help"]).stdout).to_string();
+    let share = format!("once {}% of the input's faces", (meshlod_engine::simplify::FAN_TERM_FROM * 100.0).round());
+    assert!(help.contains(&share), "{help}");
+    assert!(help.contains(&format!("{} faces or more", meshlod_engine::simplify::HALVES_FROM_FACES)), "{help}");
+    assert!(help.contains("--keep <FRACTION>"), "{help}");
 }
 
 #[test]

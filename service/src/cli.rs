@@ -306,11 +306,8 @@ pub struct SimplifyArgs {
     /// most faces stays. Not with --pm (docs/attributes-report.md).
     #[arg(long, conflicts_with = "pm")]
     pub prune: bool,
-    /// One sequence of collapses over the whole mesh, never in halves: by default a mesh of 65 536
-    /// faces or more, simplified to an eighth of them or fewer, is first simplified in two halves
-    /// side by side (faster on two threads; docs/benchmarks.md), which a progressive mesh's levels
-    /// then follow only approximately.
-    #[arg(long)]
+    /// One sequence of collapses over the whole mesh, never in halves (`--help` says when).
+    #[arg(long, help = whole_help())]
     pub whole: bool,
     /// Largest change of a face normal one collapse may cause, in degrees (default 90).
     #[arg(long)]
@@ -321,12 +318,8 @@ pub struct SimplifyArgs {
     /// `--guard` alone is weight 1; 0 is off.
     #[arg(long, value_name = "WEIGHT", num_args = 0..=1, default_missing_value = "1")]
     pub guard: Option<f64>,
-    /// Weight of the fan-distance term (default 1; 0 leaves the paper's QFVP/QEM cost as it is):
-    /// with it each collapse ranks by its quadric error per unit of area and, once 70% of the
-    /// input's faces are gone, also pays for how far it moves the faces it changes, measured on
-    /// those faces alone. Ignored with Melax, with --guard and on
-    /// meshes with texture coordinates (docs/meshlab-comparison.md, docs/attributes-report.md).
-    #[arg(long, value_name = "WEIGHT")]
+    /// Weight of the fan-distance term (`--help` says what it does).
+    #[arg(long, value_name = "WEIGHT", help = distance_term_help())]
     pub distance_term: Option<f64>,
     /// Also write the progressive mesh (base + vertex splits) to this .pm file: the compact form,
     /// positions and values on 16-bit grids (docs/pm-format.md).
@@ -689,4 +682,27 @@ fn parse_keep(text: &str) -> Result<f64, String> {
 /// kept), whichever was given: clap lets only one through.
 fn removed_fraction(ratio: Option<f64>, keep: Option<f64>) -> Option<f64> {
     ratio.or(keep.map(|k| 1.0 - k))
+}
+
+/// `--whole`'s help, its figures from the engine's constants.
+fn whole_help() -> String {
+    format!(
+        "One sequence of collapses over the whole mesh, never in halves: by default a mesh of {} faces or more, \
+         simplified to 1/{} of them or fewer, is first simplified in two halves side by side (faster on two \
+         threads; docs/benchmarks.md), which a progressive mesh's levels then follow only approximately",
+        meshlod_engine::simplify::HALVES_FROM_FACES,
+        meshlod_engine::simplify::HALVES_TO_SHARE,
+    )
+}
+
+/// `--distance-term`'s help, its figures from the engine's constants.
+fn distance_term_help() -> String {
+    format!(
+        "Weight of the fan-distance term (default {}; 0 leaves the paper's QFVP/QEM cost as it is): with it each \
+         collapse ranks by its quadric error per unit of area and, once {}% of the input's faces are gone, also \
+         pays for how far it moves the faces it changes, measured on those faces alone. Ignored with Melax, with \
+         --guard and on meshes with texture coordinates (docs/meshlab-comparison.md, docs/attributes-report.md)",
+        meshlod_engine::simplify::DEFAULT_DISTANCE_TERM,
+        (meshlod_engine::simplify::FAN_TERM_FROM * 100.0).round(),
+    )
 }

@@ -15,7 +15,7 @@ use super::vertex::VertexKind;
 /// progressive mesh's levels are the meshes a run straight to their face count gives. Measured
 /// beside meshoptimizer's and MeshLab's error over the shared meshes and the corpus, and beside
 /// meshoptimizer's time (docs/benchmarks.md).
-pub(super) const FAN_TERM_FROM: f64 = 0.7;
+pub const FAN_TERM_FROM: f64 = 0.7;
 
 impl State<'_> {
     /// The squared distance the fan-distance term charges for collapsing {a, b} to `p`: the

@@ -15,10 +15,10 @@
 //! at what error, in docs/benchmarks.md). Each half stops at [`FIRST_STAGE_TARGET`] times the run's target
 //! (besides the band's faces): the whole run leaves at most the target on either side, so the
 //! first stage never goes further than it would. The fan-distance term starts in each half once
-//! 70% of the half's faces are gone. The second stage is one run over what is left, to the
+//! the share `FAN_TERM_FROM` of the half's faces is gone. The second stage is one run over what is left, to the
 //! target: the quadrics, normals and classes of the vertices off the cut carried over from their
 //! half (the faces round a cut vertex never changed, so its quadric is made again from them
-//! exactly), the term measured once 70% of the whole input's faces are gone.
+//! exactly), the term measured once that share of the whole input's faces is gone.
 //!
 //! The result is the same on any number of threads (the cut depends on the mesh alone), and the
 //! progressive mesh is valid and restores the input exactly (the halves' collapses interleaved by
@@ -47,6 +47,9 @@ pub const HALVES_FROM_FACES: usize = 1 << 16;
 /// for halves (docs/benchmarks.md).
 const FIRST_STAGE_TARGET: usize = 2;
 
+/// A run goes in halves only to at most one `HALVES_TO_SHARE`-th of its faces.
+pub const HALVES_TO_SHARE: usize = 8;
+
 /// Whether a run of `prepared` to `target` faces goes in halves: large enough, to an eighth of
 /// its faces or fewer (each half then does at least half of its collapses in the first stage),
 /// with the quadric costs alone (not Melax, the guard, part pruning or an error limit) and without
@@ -55,7 +58,7 @@ pub(super) fn applies(prepared: &Mesh, options: &SimplifyOptions, target: usize)
     let faces = prepared.face_count();
     options.halves
         && faces >= HALVES_FROM_FACES
-        && 8 * target <= faces
+        && HALVES_TO_SHARE * target <= faces
         && options.metric != Metric::Melax
         && options.guard == 0.0
         && !options.prune

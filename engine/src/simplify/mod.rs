@@ -55,8 +55,8 @@
 //! (`fan_term`): from each moved face's new centroid to the plane it had, and from each endpoint to
 //! the planes of its moved faces; for a collapse of two border vertices, also how far each endpoint
 //! is from the border's new line. It reads only what the legality checks read next, and is queued
-//! lazily like the guard below. It is measured once 70% of the input's faces are gone
-//! (`fan_term::FAN_TERM_FROM`): before that, collapses move the surface so little that the term
+//! lazily like the guard below. It is measured once the share [`FAN_TERM_FROM`] of the input's
+//! faces is gone: before that, collapses move the surface so little that the term
 //! bought little accuracy for its time (they are ranked per unit of area all the same); with it the
 //! default beats both meshoptimizer and MeshLab's quadric collapse on most cells of
 //! docs/meshlab-comparison.md, at the price in time given in docs/benchmarks.md. 0 gives the
@@ -158,7 +158,8 @@ mod vertex;
 
 pub use classify::prepare;
 pub(crate) use classify::prepare_with_attributes;
-pub use halves::HALVES_FROM_FACES;
+pub use fan_term::FAN_TERM_FROM;
+pub use halves::{HALVES_FROM_FACES, HALVES_TO_SHARE};
 pub(crate) use kernel::State;
 pub use legality::MIN_TRIANGLE_QUALITY;
 pub use options::{

@@ -149,8 +149,8 @@ pub struct SimplifyOptions {
     /// surface area behind the merged quadric, plus `distance_term · d²`, before the normal
     /// factor, like the guard's term but with d measured on the fans the collapse changes only:
     /// from each new face's centroid to the plane of the face it was, and from each endpoint to
-    /// the new faces that were its own (the module doc's "fan-distance term"), once 70% of the
-    /// input's faces are gone (the collapses before are ranked by their quadric error over A
+    /// the new faces that were its own (the module doc's "fan-distance term"), once the share
+    /// [`super::FAN_TERM_FROM`] of the input's faces is gone (the collapses before are ranked by their quadric error over A
     /// alone). Its price in time is in docs/benchmarks.md; ignored with Melax, while the guard is
     /// on (the guard measures against the input instead) and on meshes with texture coordinates
     /// (measured worse there, docs/attributes-report.md).
@@ -283,8 +283,9 @@ pub struct SimplifyStats {
     /// Whether the run went in two halves first ([`SimplifyOptions::halves`]).
     pub halves: bool,
     /// The fan-distance term's weight that applied: 0 where it was off or did not apply (Melax,
-    /// the distance guard on, texture coordinates carried). It is measured once 70% of the input's
-    /// faces are gone, so a run that stops before that never pays it.
+    /// the distance guard on, texture coordinates carried). It is measured once the share
+    /// [`super::FAN_TERM_FROM`] of the input's faces is gone, so a run that stops before that never
+    /// pays it.
     pub distance_term: f64,
     /// Wall time in seconds.
     pub seconds: f64,
