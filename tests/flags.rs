@@ -54,7 +54,7 @@ fn client_honours_every_flag_and_reports_as_local_does() {
     assert!(String::from_utf8_lossy(&text.stdout).contains("faces"));
     fails_with(
         &["client", "--server", &server.address, "simplify", s(&input), "-o", s(&dir.join("t.ply")), "--ratio", "2"],
-        "target_ratio",
+        "--ratio (options.target_ratio): 2 is outside",
     );
     // A URL works as well as host:port; a closed port is reported, not hung on.
     let url = format!("http://{}", server.address);

@@ -139,9 +139,9 @@ fn add_input_warnings(warnings: &mut Vec<String>, input: &meshlod_engine::Mesh, 
     warnings.splice(at..at, missing);
 }
 
-/// A status from the server as an error for people.
+/// A status from the server as the job error it stands for, said to come from the server.
 fn status_error(status: tonic::Status) -> anyhow::Error {
-    anyhow::anyhow!("server: {} ({:?})", status.message(), status.code())
+    anyhow::Error::new(crate::convert::error_from_status(&status)).context("server")
 }
 
 impl Executor for Remote {

@@ -13,6 +13,8 @@ use meshlod_engine::simplify::{BoundaryMode, Metric, NormalUpdate, Placement, Si
 use meshlod_engine::{Mesh, MeshError};
 use tonic::Status;
 
+use crate::error::{ErrorKind, JobError};
+
 use crate::proto;
 
 /// Size limits applied to every mesh a request carries.
@@ -40,15 +42,46 @@ impl Default for MeshLimits {
     }
 }
 
-fn invalid(field: impl AsRef<str>, message: impl AsRef<str>) -> Status {
-    Status::invalid_argument(format!("{}: {}", field.as_ref(), message.as_ref()))
+fn invalid(field: impl AsRef<str>, message: impl AsRef<str>) -> JobError {
+    JobError::invalid(field.as_ref(), message.as_ref())
 }
 
-/// Maps an engine error onto a gRPC status, naming the request field it concerns: a parameter
-/// error names `options_field.name`, or `name` alone when `options_field` is empty.
-pub fn engine_status(error: MeshError, options_field: &str) -> Status {
+/// A job's error as a gRPC status, whose message starts with the field at fault: the one place
+/// the service's errors meet the transport.
+impl From<JobError> for Status {
+    fn from(e: JobError) -> Status {
+        let message = e.to_string();
+        match e.kind {
+            ErrorKind::InvalidArgument => Status::invalid_argument(message),
+            ErrorKind::FailedPrecondition => Status::failed_precondition(message),
+            ErrorKind::Cancelled => Status::cancelled(message),
+            ErrorKind::Internal => Status::internal(message),
+        }
+    }
+}
+
+/// A server's status as the job error it stands for: the field read back from the start of its
+/// message where it names one (the contract's form, `field: reason`).
+pub fn error_from_status(status: &Status) -> JobError {
+    let kind = match status.code() {
+        tonic::Code::InvalidArgument => ErrorKind::InvalidArgument,
+        tonic::Code::FailedPrecondition => ErrorKind::FailedPrecondition,
+        tonic::Code::Cancelled => ErrorKind::Cancelled,
+        _ => ErrorKind::Internal,
+    };
+    let message = status.message();
+    let named = message.split_once(": ").filter(|(field, _)| !field.is_empty() && !field.contains(' '));
+    match named {
+        Some((field, reason)) => JobError { field: field.into(), kind, reason: reason.into() },
+        None => JobError { field: String::new(), kind, reason: format!("{message} ({:?})", status.code()) },
+    }
+}
+
+/// An engine error as a job error, naming the request field it concerns: a parameter error names
+/// `options_field.name`, or `name` alone when `options_field` is empty.
+pub fn engine_error(error: MeshError, options_field: &str) -> JobError {
     match error {
-        MeshError::Cancelled => Status::cancelled("request cancelled"),
+        MeshError::Cancelled => JobError::cancelled(),
         MeshError::InvalidParameter { name, reason } if options_field.is_empty() => invalid(name, reason),
         MeshError::InvalidParameter { name, reason } => invalid(format!("{options_field}.{name}"), reason),
         MeshError::TooLarge { .. } => invalid("input", error.to_string()),
@@ -57,7 +90,7 @@ pub fn engine_status(error: MeshError, options_field: &str) -> Status {
         | MeshError::IndexOutOfRange { .. }
         | MeshError::Parse { .. }
         | MeshError::UnsupportedFormat { .. } => invalid("input", error.to_string()),
-        MeshError::Io { .. } => Status::internal(error.to_string()),
+        MeshError::Io { .. } => JobError::internal(error.to_string()),
     }
 }
 
@@ -68,7 +101,7 @@ pub fn mesh_from_input(
     field: &str,
     limits: &MeshLimits,
     cancel: Option<Arc<AtomicBool>>,
-) -> Result<Mesh, Status> {
+) -> Result<Mesh, JobError> {
     let source =
         input.and_then(|i| i.source.as_ref()).ok_or_else(|| invalid(field, "missing: give a mesh or a file"))?;
     match source {
@@ -89,7 +122,7 @@ pub fn mesh_from_input(
                 ReadLimits { max_vertices: limits.max_vertices as u64, max_faces: limits.max_faces as u64, cancel };
             let mesh =
                 read_mesh_bytes(&file.data, format, Path::new("request"), &read_limits).map_err(|e| match e {
-                    MeshError::Cancelled => Status::cancelled("request cancelled"),
+                    MeshError::Cancelled => JobError::cancelled(),
                     e => invalid(format!("{field}.file"), e.to_string()),
                 })?;
             if mesh.triangles.is_empty() {
@@ -101,7 +134,7 @@ pub fn mesh_from_input(
 }
 
 /// Checks and converts a contract mesh.
-pub fn mesh_from_proto(m: &proto::Mesh, field: &str, limits: &MeshLimits) -> Result<Mesh, Status> {
+pub fn mesh_from_proto(m: &proto::Mesh, field: &str, limits: &MeshLimits) -> Result<Mesh, JobError> {
     if !m.positions.len().is_multiple_of(3) {
         return Err(invalid(
             format!("{field}.positions"),
@@ -148,7 +181,7 @@ pub fn mesh_from_proto(m: &proto::Mesh, field: &str, limits: &MeshLimits) -> Res
         name: &str,
         vertex_count: usize,
         triangles: &[[u32; 3]],
-    ) -> Result<Option<Vec<[f32; N]>>, Status> {
+    ) -> Result<Option<Vec<[f32; N]>>, JobError> {
         if values.is_empty() {
             return Ok(None);
         }
@@ -187,7 +220,7 @@ pub fn mesh_from_proto(m: &proto::Mesh, field: &str, limits: &MeshLimits) -> Res
 
 /// The file format a request asks its result in (`None`: as a `Mesh`); read-only formats and
 /// unknown values are INVALID_ARGUMENT naming `field`.
-pub fn output_format(value: i32, field: &str) -> Result<Option<proto::MeshFormat>, Status> {
+pub fn output_format(value: i32, field: &str) -> Result<Option<proto::MeshFormat>, JobError> {
     match proto::MeshFormat::try_from(value) {
         Ok(proto::MeshFormat::Unspecified) => Ok(None),
         Ok(f @ (proto::MeshFormat::Obj | proto::MeshFormat::Ply | proto::MeshFormat::Gltf)) => Ok(Some(f)),
@@ -198,7 +231,7 @@ pub fn output_format(value: i32, field: &str) -> Result<Option<proto::MeshFormat
 
 /// The write options a request's `quantize_output` asks for, checked against its output format
 /// (before any work).
-pub fn write_options(quantize: bool, format: Option<proto::MeshFormat>) -> Result<WriteOptions, Status> {
+pub fn write_options(quantize: bool, format: Option<proto::MeshFormat>) -> Result<WriteOptions, JobError> {
     if quantize && format != Some(proto::MeshFormat::Gltf) {
         return Err(invalid(
             "quantize_output",
@@ -213,7 +246,7 @@ pub fn encode_mesh(
     mesh: &Mesh,
     format: Option<proto::MeshFormat>,
     write: &WriteOptions,
-) -> Result<Option<proto::EncodedMesh>, Status> {
+) -> Result<Option<proto::EncodedMesh>, JobError> {
     let Some(format) = format else { return Ok(None) };
     let engine_format = match format {
         proto::MeshFormat::Obj => MeshFormat::Obj,
@@ -303,11 +336,11 @@ pub fn pm_base_to_proto(pm: &ProgressiveMesh) -> proto::Mesh {
 
 /// Rebuilds a progressive mesh from its contract form (a client reassembling a stream), checking
 /// it by replaying every split.
-pub fn progressive_from_proto(base: &proto::Mesh, splits: &[proto::VertexSplit]) -> Result<ProgressiveMesh, Status> {
+pub fn progressive_from_proto(base: &proto::Mesh, splits: &[proto::VertexSplit]) -> Result<ProgressiveMesh, JobError> {
     let base = mesh_from_proto(base, "base", &MeshLimits::default())?;
     let mut out = Vec::with_capacity(splits.len());
     for (j, s) in splits.iter().enumerate() {
-        let triple = |v: &[f32], what: &str| -> Result<[f32; 3], Status> {
+        let triple = |v: &[f32], what: &str| -> Result<[f32; 3], JobError> {
             <[f32; 3]>::try_from(v).map_err(|_| invalid(format!("splits[{j}].{what}"), "needs 3 floats"))
         };
         out.push(StreamedSplit {
@@ -333,9 +366,9 @@ pub fn progressive_from_proto(base: &proto::Mesh, splits: &[proto::VertexSplit])
 /// end, and its errors name the same fields. `w` is the request's (0 where unset, and where
 /// `w_auto` or `w_search` will replace it).
 impl TryFrom<&proto::SimplifyOptions> for SimplifyOptions {
-    type Error = Status;
+    type Error = JobError;
 
-    fn try_from(o: &proto::SimplifyOptions) -> Result<SimplifyOptions, Status> {
+    fn try_from(o: &proto::SimplifyOptions) -> Result<SimplifyOptions, JobError> {
         let w = if o.w_auto || o.w_search { 0.0 } else { o.w.unwrap_or(0.0) };
         let metric = match proto::Metric::try_from(o.metric) {
             Ok(proto::Metric::Unspecified | proto::Metric::Qfvp) => Metric::Qfvp { w },
@@ -420,7 +453,7 @@ pub fn hausdorff_to_proto(d: &meshlod_engine::hausdorff::HausdorffReport) -> pro
 pub fn hausdorff_options(
     tolerance: Option<f64>,
     samples: Option<u32>,
-) -> Result<meshlod_engine::hausdorff::HausdorffOptions, Status> {
+) -> Result<meshlod_engine::hausdorff::HausdorffOptions, JobError> {
     let options = meshlod_engine::hausdorff::HausdorffOptions {
         tolerance: tolerance.unwrap_or(meshlod_engine::hausdorff::HausdorffOptions::DEFAULT_TOLERANCE),
         samples: samples.map(|n| n as usize),
@@ -438,6 +471,22 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_job_error_and_its_status_say_the_same() {
+        let error = JobError::invalid("options.target_ratio", "1.5 is outside [0, 1)");
+        let status = Status::from(error.clone());
+        assert_eq!(status.code(), tonic::Code::InvalidArgument);
+        assert_eq!(status.message(), "options.target_ratio: 1.5 is outside [0, 1)");
+        assert_eq!(error_from_status(&status), error);
+        assert_eq!(error.flag(), Some("--ratio"));
+        // A message that names no field keeps its words and its code.
+        let plain = error_from_status(&Status::failed_precondition("this server runs without a predictor model"));
+        assert_eq!((plain.field.as_str(), plain.kind), ("", ErrorKind::FailedPrecondition));
+        assert!(plain.reason.starts_with("this server runs without a predictor model"), "{plain}");
+        let cancelled = Status::from(JobError::cancelled());
+        assert_eq!(cancelled.code(), tonic::Code::Cancelled);
+    }
+
+    #[test]
     fn a_face_limit_is_the_limit_a_user_meets() {
         // Two faces and five vertices (one unused) under --max-faces 2: accepted; the message a
         // user can act on is about faces.
@@ -445,8 +494,9 @@ mod tests {
         let mesh = proto::Mesh { positions: vec![0.0; 15], indices: vec![0, 1, 2, 0, 2, 3], ..Default::default() };
         assert!(mesh_from_proto(&mesh, "input.mesh", &limits).is_ok());
         let three = proto::Mesh { indices: vec![0, 1, 2, 0, 2, 3, 1, 2, 3], ..mesh };
-        let status = mesh_from_proto(&three, "input.mesh", &limits).unwrap_err();
-        assert!(status.message().contains("3 faces exceeds the limit of 2"), "{}", status.message());
+        let error = mesh_from_proto(&three, "input.mesh", &limits).unwrap_err();
+        assert!(error.reason.contains("3 faces exceeds the limit of 2"), "{error}");
+        assert_eq!((error.field.as_str(), error.kind), ("input.mesh", ErrorKind::InvalidArgument));
     }
 
     #[test]
@@ -490,7 +540,7 @@ mod tests {
         let mut bad = sent.splits.clone();
         let j = bad.iter().position(|s| s.hole != 0).unwrap();
         bad[j].hole = 7;
-        let status = progressive_from_proto(base, &bad).unwrap_err();
-        assert!(status.message().contains(&format!("splits[{j}].hole")), "{}", status.message());
+        let error = progressive_from_proto(base, &bad).unwrap_err();
+        assert_eq!(error.field, format!("splits[{j}].hole"), "{error}");
     }
 }

@@ -14,6 +14,7 @@ use meshlod_engine::pm::ProgressiveMesh;
 use meshlod_engine::pm_format::{encode, encode_lossless};
 use meshlod_predictor::Predictor;
 
+use crate::error::JobError;
 use crate::proto;
 use crate::report::{self, Report};
 
@@ -163,13 +164,15 @@ impl Local {
     }
 }
 
-/// A status from the jobs as an error for people: its message names the field, and the file
-/// where the field is the input mesh.
-fn status_error(status: tonic::Status, input: &Path) -> anyhow::Error {
-    let message = status.message();
-    match message.strip_prefix("input") {
-        Some(rest) if rest.starts_with(':') || rest.starts_with('.') => anyhow::anyhow!("{}{rest}", input.display()),
-        _ => anyhow::anyhow!("{message}"),
+/// A job's error as an error for people: where the field is the input mesh, it names the file
+/// instead (`bunny.obj.mesh.indices[7]: …` reads as the file's fault); otherwise the typed error
+/// itself, so that the command line can name the flag that set the field.
+fn job_error(e: JobError, input: &Path) -> anyhow::Error {
+    match e.field.strip_prefix("input") {
+        Some(rest) if rest.is_empty() || rest.starts_with('.') => {
+            anyhow::anyhow!("{}{rest}: {}", input.display(), e.reason)
+        }
+        _ => anyhow::Error::new(e),
     }
 }
 
@@ -179,8 +182,8 @@ impl Executor for Local {
         let mesh = load(&job.input)?;
         let options = proto::SimplifyOptions { return_progressive: job.pm.is_some(), ..job.options };
         let predictor = self.predictor_if(options.w_auto)?;
-        let run = crate::jobs::simplify(&mesh, &options, predictor.as_deref(), None)
-            .map_err(|e| status_error(e, &job.input))?;
+        let run =
+            crate::jobs::simplify(&mesh, &options, predictor.as_deref(), None).map_err(|e| job_error(e, &job.input))?;
         let progressive = run.result.progressive.as_ref();
         finish_simplify(job, &run.result.mesh, progressive, None, &run.stats, run.hausdorff.as_ref())
     }
@@ -190,7 +193,7 @@ impl Executor for Local {
         let mesh = load(&job.input)?;
         let predictor = self.predictor_if(job.request.etc_auto)?;
         let (result, stats) = crate::jobs::refine(&mesh, &job.request, predictor.as_deref(), None, usize::MAX)
-            .map_err(|e| status_error(e, &job.input))?;
+            .map_err(|e| job_error(e, &job.input))?;
         finish_refine(job, &result.mesh, &stats)
     }
 
@@ -198,7 +201,7 @@ impl Executor for Local {
         let mesh = load(&job.input)?;
         let predictor = self.predictor()?;
         let response = crate::jobs::predict_mesh(&predictor, &mesh, job.target_faces, job.target_ratio)
-            .map_err(|e| status_error(e, &job.input))?;
+            .map_err(|e| job_error(e, &job.input))?;
         Ok(report::predict(&response))
     }
 }

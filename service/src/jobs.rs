@@ -17,9 +17,9 @@ use meshlod_engine::simplify::{Metric, NormalUpdate, Simplified, SimplifyOptions
 use meshlod_engine::simplify::{prepare, simplify_search_w};
 use meshlod_engine::{Mesh, MeshError};
 use meshlod_predictor::Predictor;
-use tonic::Status;
 
-use crate::convert::{self, engine_status};
+use crate::convert::{self, engine_error};
+use crate::error::JobError;
 use crate::proto;
 
 /// What [`simplify`] produced.
@@ -69,22 +69,22 @@ pub fn simplify(
     o: &proto::SimplifyOptions,
     predictor: Option<&Predictor>,
     cancel: Option<Arc<AtomicBool>>,
-) -> Result<Simplification, Status> {
+) -> Result<Simplification, JobError> {
     if o.w_auto && o.w_search {
-        return Err(Status::invalid_argument("options.w_search: not together with options.w_auto"));
+        return Err(JobError::invalid("options.w_search", "not together with options.w_auto"));
     }
     // Every option checked before any work, the predictor's included.
     let mut options = SimplifyOptions::try_from(o)?;
-    options.validate().map_err(|e| engine_status(e, "options"))?;
+    options.validate().map_err(|e| engine_error(e, "options"))?;
     options.cancel = cancel;
     let (w_source, model_version) = if o.w_search {
         (proto::WSource::Searched, String::new())
     } else if o.w_auto {
         let predictor = predictor
-            .ok_or_else(|| Status::failed_precondition("options.w_auto: this server runs without a predictor model"))?;
+            .ok_or_else(|| JobError::precondition("options.w_auto", "this server runs without a predictor model"))?;
         // The target the run will stop at, as the engine counts it.
         let target = options.face_target_for(mesh);
-        let advice = crate::predict::advise(predictor, mesh, target).map_err(|e| Status::internal(e.to_string()))?;
+        let advice = crate::predict::advise(predictor, mesh, target).map_err(|e| JobError::internal(e.to_string()))?;
         if let Metric::Qfvp { w } = &mut options.metric {
             *w = advice.w.w;
         }
@@ -94,19 +94,19 @@ pub fn simplify(
     };
     // A search has measured its result already; `measured` keeps that for compute_hausdorff.
     let (result, w_candidates, measured) = if o.w_search {
-        let search = simplify_search_w(mesh, &options, &W_CLASSES).map_err(|e| engine_status(e, "options"))?;
+        let search = simplify_search_w(mesh, &options, &W_CLASSES).map_err(|e| engine_error(e, "options"))?;
         options.metric = Metric::Qfvp { w: search.w };
         let candidates = search.errors.iter().map(|&(w, hausdorff)| proto::WCandidate { w, hausdorff }).collect();
         (search.best, candidates, Some(search.hausdorff))
     } else {
-        (engine_simplify(mesh, &options).map_err(|e| engine_status(e, "options"))?, Vec::new(), None)
+        (engine_simplify(mesh, &options).map_err(|e| engine_error(e, "options"))?, Vec::new(), None)
     };
     let hausdorff = if o.compute_hausdorff {
         let d = match measured {
             Some(d) => d,
             None => {
                 let h = HausdorffOptions { cancel: options.cancel.clone(), ..Default::default() };
-                hausdorff(mesh, &result.mesh, &h).map_err(|e| engine_status(e, "options"))?
+                hausdorff(mesh, &result.mesh, &h).map_err(|e| engine_error(e, "options"))?
             }
         };
         Some(convert::hausdorff_to_proto(&d))
@@ -167,26 +167,24 @@ fn refine_options(
     mesh: &Mesh,
     r: &proto::RefineRequest,
     predictor: Option<&Predictor>,
-) -> Result<(RefineOptions, &'static str, String), Status> {
+) -> Result<(RefineOptions, &'static str, String), JobError> {
     let mut etc = r.etc;
     let mut target_faces = r.target_faces.map(|n| n as usize);
     let mut model_version = String::new();
     if r.etc_auto {
         if r.etc.is_some() {
-            return Err(Status::invalid_argument("etc: give etc or etc_auto, not both"));
+            return Err(JobError::invalid("etc", "give etc or etc_auto, not both"));
         }
         let predictor = predictor
-            .ok_or_else(|| Status::failed_precondition("etc_auto: this server runs without a predictor model"))?;
+            .ok_or_else(|| JobError::precondition("etc_auto", "this server runs without a predictor model"))?;
         let target =
-            target_faces.ok_or_else(|| Status::invalid_argument("target_faces: etc_auto needs a target face count"))?;
-        let advice = crate::predict::advise(predictor, mesh, target).map_err(|e| Status::internal(e.to_string()))?;
+            target_faces.ok_or_else(|| JobError::invalid("target_faces", "etc_auto needs a target face count"))?;
+        let advice = crate::predict::advise(predictor, mesh, target).map_err(|e| JobError::internal(e.to_string()))?;
         etc = Some(advice.etc);
         target_faces = None;
         model_version = advice.model_version;
     } else if r.etc.is_some() && r.target_faces.is_some() {
-        return Err(Status::invalid_argument(
-            "etc: give etc or target_faces, not both (or etc_auto with target_faces)",
-        ));
+        return Err(JobError::invalid("etc", "give etc or target_faces, not both (or etc_auto with target_faces)"));
     }
     let mode = match proto::RefineMode::try_from(r.mode) {
         Ok(proto::RefineMode::Simplify) => RefineMode::Simplify,
@@ -197,7 +195,7 @@ fn refine_options(
             Some(n) if (n as usize) < mesh.face_count() => RefineMode::Simplify,
             _ => RefineMode::Subdivide,
         },
-        Err(_) => return Err(Status::invalid_argument(format!("mode: unknown value {}", r.mode))),
+        Err(_) => return Err(JobError::invalid("mode", format!("unknown value {}", r.mode))),
     };
     let source = if r.etc_auto {
         "predicted"
@@ -219,18 +217,17 @@ pub fn refine(
     predictor: Option<&Predictor>,
     cancel: Option<Arc<AtomicBool>>,
     max_faces: usize,
-) -> Result<(Refined, proto::RefineStats), Status> {
+) -> Result<(Refined, proto::RefineStats), JobError> {
     let (mut options, etc_source, model_version) = refine_options(mesh, r, predictor)?;
     options.cancel = cancel;
     options.max_faces = Some(max_faces);
     // The output's size is known before each subdivision round is built: refused before the work.
     let result = engine_refine(mesh, &options).map_err(|e| match e {
-        MeshError::TooLarge { what, count, limit, .. } if what.starts_with("faces (refine") => {
-            Status::invalid_argument(format!(
-                "rounds: the result would have {count} faces or more, over the limit of {limit}"
-            ))
-        }
-        other => engine_status(other, ""),
+        MeshError::TooLarge { what, count, limit, .. } if what.starts_with("faces (refine") => JobError::invalid(
+            "rounds",
+            format!("the result would have {count} faces or more, over the limit of {limit}"),
+        ),
+        other => engine_error(other, ""),
     })?;
     let s = &result.stats;
     let stats = proto::RefineStats {
@@ -262,16 +259,16 @@ pub fn predict(
     faces_in: usize,
     target_faces: Option<u32>,
     target_ratio: Option<f64>,
-) -> Result<proto::PredictResponse, Status> {
+) -> Result<proto::PredictResponse, JobError> {
     if target_faces.is_none() && target_ratio.is_none() {
-        return Err(Status::invalid_argument("target_faces: give target_faces or target_ratio"));
+        return Err(JobError::invalid("target_faces", "give target_faces or target_ratio"));
     }
     let targets =
         SimplifyOptions { target_faces: target_faces.map(|n| n as usize), target_ratio, ..Default::default() };
-    targets.validate().map_err(|e| engine_status(e, ""))?;
+    targets.validate().map_err(|e| engine_error(e, ""))?;
     let target = targets.face_target(faces_in).max(1);
     let advice = crate::predict::advise_features(predictor, shape, faces_in, target)
-        .map_err(|e| Status::invalid_argument(format!("features.values: {e}")))?;
+        .map_err(|e| JobError::invalid("features.values", e.to_string()))?;
     Ok(proto::PredictResponse {
         w: advice.w.w,
         probabilities: advice.w.probabilities,
@@ -290,22 +287,25 @@ pub fn predict_mesh(
     mesh: &Mesh,
     target_faces: Option<u32>,
     target_ratio: Option<f64>,
-) -> Result<proto::PredictResponse, Status> {
+) -> Result<proto::PredictResponse, JobError> {
     // Faces that repeat a vertex are dropped first, as the simplifier does.
     let (mesh, _, _) = prepare(mesh);
     predict(predictor, &shape_features(&mesh), mesh.face_count(), target_faces, target_ratio)
 }
 
 /// The shape features a Predict request carries instead of a mesh, checked.
-pub fn features_from_proto(f: &proto::ShapeFeatures) -> Result<Shape, Status> {
+pub fn features_from_proto(f: &proto::ShapeFeatures) -> Result<Shape, JobError> {
     let shape: Shape = f.values.as_slice().try_into().map_err(|_| {
-        Status::invalid_argument(format!(
-            "features.values: expected the {SHAPE_FEATURES} shape features {SHAPE_FEATURE_NAMES:?}, got {} values",
-            f.values.len()
-        ))
+        JobError::invalid(
+            "features.values",
+            format!(
+                "expected the {SHAPE_FEATURES} shape features {SHAPE_FEATURE_NAMES:?}, got {} values",
+                f.values.len()
+            ),
+        )
     })?;
     if let Some(i) = shape.iter().position(|v| !v.is_finite()) {
-        return Err(Status::invalid_argument(format!("features.values[{i}]: {} is not finite", shape[i])));
+        return Err(JobError::invalid(format!("features.values[{i}]"), format!("{} is not finite", shape[i])));
     }
     Ok(shape)
 }

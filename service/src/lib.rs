@@ -14,6 +14,7 @@
 
 pub mod client;
 pub mod convert;
+pub mod error;
 pub mod executor;
 pub mod jobs;
 pub mod metrics;

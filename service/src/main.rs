@@ -29,37 +29,19 @@ fn main() -> ExitCode {
             ExitCode::from(141)
         }
         Err(err) => {
-            eprintln!("meshlod: error: {}", with_flag(&format!("{err:#}")));
+            eprintln!("meshlod: error: {}", with_flag(&err));
             ExitCode::FAILURE
         }
     }
 }
 
-/// The command-line flag of each request field an error can start with.
-const FLAGS: [(&str, &str); 15] = [
-    ("options.target_ratio", "--ratio"),
-    ("options.target_faces", "--faces"),
-    ("options.max_error", "--max-error"),
-    ("options.w_search", "--w search"),
-    ("options.w_auto", "--w auto"),
-    ("options.w", "--w"),
-    ("options.guard", "--guard"),
-    ("options.distance_term", "--distance-term"),
-    ("options.max_normal_change_degrees", "--max-normal-change"),
-    ("target_ratio", "--ratio"),
-    ("target_faces", "--faces"),
-    ("etc_auto", "--etc auto"),
-    ("etc", "--etc"),
-    ("rounds", "--rounds"),
-    ("mode", "--mode"),
-];
-
-/// An error that starts with a request field (as the jobs name them) also names the flag.
-fn with_flag(message: &str) -> String {
-    for (field, flag) in FLAGS {
-        if let Some(rest) = message.strip_prefix(field).and_then(|r| r.strip_prefix(':')) {
-            return format!("{flag} ({field}):{rest}");
-        }
+/// The error for people: where a job's error names a request field that a flag sets, the flag
+/// too (`--faces (options.target_faces): …`), whether the job ran here or on a server.
+fn with_flag(err: &anyhow::Error) -> String {
+    let text = format!("{err:#}");
+    let job = err.chain().find_map(|e| e.downcast_ref::<meshlod_service::error::JobError>());
+    match job.and_then(|job| job.flag().map(|flag| (job, flag))) {
+        Some((job, flag)) => text.replacen(&job.to_string(), &format!("{flag} ({}): {}", job.field, job.reason), 1),
+        None => text,
     }
-    message.to_string()
 }

@@ -5,9 +5,9 @@
 
 use std::collections::HashMap;
 
+use crate::error::JobError;
 use meshlod_engine::mesh::{CornerAttributes, MaterialLibrary, NO_MATERIAL, Rig};
 use meshlod_engine::pm::{PmAttributes, ProgressiveMesh, SplitAttributes};
-use tonic::Status;
 
 use crate::convert::progressive_from_proto;
 use crate::proto;
@@ -22,14 +22,14 @@ pub fn progressive_from_stream(
     base: &proto::Mesh,
     base_corners: Option<&proto::CornerValues>,
     splits: &[proto::VertexSplit],
-) -> Result<ProgressiveMesh, Status> {
+) -> Result<ProgressiveMesh, JobError> {
     let pm = progressive_from_proto(base, splits)?;
     let Some(base_corners) = base_corners else { return Ok(pm) };
     let values: Vec<proto::CornerValues> = splits
         .iter()
         .enumerate()
         .map(|(j, s)| s.corners.clone().ok_or_else(|| invalid(format!("splits[{j}].corners"), "missing")))
-        .collect::<Result<_, Status>>()?;
+        .collect::<Result<_, JobError>>()?;
     let attributes = values_from_stream(&pm, base_corners, &values)?;
     pm.with_attributes(attributes).map_err(|e| invalid("corners", e.to_string()))
 }
@@ -102,7 +102,7 @@ pub fn values_from_stream(
     pm: &ProgressiveMesh,
     base: &proto::CornerValues,
     splits: &[proto::CornerValues],
-) -> Result<PmAttributes, Status> {
+) -> Result<PmAttributes, JobError> {
     if splits.len() != pm.levels() {
         return Err(invalid("splits", format!("{} carry values for {} splits", splits.len(), pm.levels())));
     }
@@ -122,12 +122,12 @@ pub fn values_from_stream(
         weights: present(&first.weights),
         ..Default::default()
     };
-    let read = |values: &mut CornerAttributes, message: &proto::CornerValues, at: &str| -> Result<(), Status> {
+    let read = |values: &mut CornerAttributes, message: &proto::CornerValues, at: &str| -> Result<(), JobError> {
         let added = message.added.as_ref().unwrap_or(&empty);
         append(values, added).map_err(|reason| invalid(format!("{at}.added"), reason))
     };
     read(&mut values, base, "base_corners")?;
-    let index = |k: u32, known: u32, at: &str| -> Result<u32, Status> {
+    let index = |k: u32, known: u32, at: &str| -> Result<u32, JobError> {
         if k < known { Ok(k) } else { Err(invalid(at, format!("value {k} is not in the table ({known} values)"))) }
     };
     let faces = pm.base().face_count();
@@ -145,7 +145,7 @@ pub fn values_from_stream(
                 index(c[2], known, "base_corners")?,
             ])
         })
-        .collect::<Result<Vec<[u32; 3]>, Status>>()?;
+        .collect::<Result<Vec<[u32; 3]>, JobError>>()?;
     let mut out = Vec::with_capacity(splits.len());
     for (j, (s, message)) in pm.splits().iter().zip(splits).enumerate() {
         let at = format!("splits[{j}].corners");
@@ -163,7 +163,7 @@ pub fn values_from_stream(
             .moved
             .chunks_exact(2)
             .map(|m| Ok((m[0], index(m[1], known, &at)?)))
-            .collect::<Result<_, Status>>()?;
+            .collect::<Result<_, JobError>>()?;
         out.push(SplitAttributes { new_faces, moved });
     }
     // The contract's texture coordinates have v up.
@@ -248,6 +248,6 @@ fn append(values: &mut CornerAttributes, added: &proto::AttributeValues) -> Resu
     Ok(())
 }
 
-fn invalid(field: impl AsRef<str>, reason: impl std::fmt::Display) -> Status {
-    Status::invalid_argument(format!("{}: {reason}", field.as_ref()))
+fn invalid(field: impl AsRef<str>, reason: impl std::fmt::Display) -> JobError {
+    JobError::invalid(field.as_ref(), reason.to_string())
 }

@@ -14,7 +14,7 @@ use tonic::{Request, Response, Status};
 use super::admission::Admission;
 use super::codes;
 use super::config::ServerConfig;
-use crate::convert::{self, engine_status, mesh_from_input, mesh_to_proto, progressive_to_proto, split_to_proto};
+use crate::convert::{self, engine_error, mesh_from_input, mesh_to_proto, progressive_to_proto, split_to_proto};
 use crate::jobs;
 use crate::metrics::Metrics;
 use crate::proto;
@@ -294,7 +294,7 @@ impl MeshLod for MeshLodService {
                 for (mesh, field) in [(&a, "a"), (&b, "b")] {
                     check_surface(mesh).map_err(|e| Status::invalid_argument(format!("{field}: {e}")))?;
                 }
-                let d = hausdorff(&a, &b, &options).map_err(|e| engine_status(e, ""))?;
+                let d = hausdorff(&a, &b, &options).map_err(|e| Status::from(engine_error(e, "")))?;
                 Ok(convert::hausdorff_to_proto(&d))
             })
             .await?;
@@ -319,6 +319,7 @@ impl MeshLod for MeshLodService {
                     proto::predict_request::Subject::Input(input) => {
                         let mesh = mesh_from_input(Some(input), "input", &limits, Some(cancel.clone()))?;
                         jobs::predict_mesh(&predictor, &mesh, request.target_faces, request.target_ratio)
+                            .map_err(Status::from)
                     }
                     proto::predict_request::Subject::Features(f) => {
                         let shape = jobs::features_from_proto(f)?;
@@ -332,7 +333,7 @@ impl MeshLod for MeshLodService {
                             return Err(Status::invalid_argument(format!("target_ratio: {r} is outside [0, 1)")));
                         }
                         let faces_in = (t as f64 / (1.0 - r)).round() as usize;
-                        jobs::predict(&predictor, &shape, faces_in, Some(t), None)
+                        jobs::predict(&predictor, &shape, faces_in, Some(t), None).map_err(Status::from)
                     }
                 }
             })
