@@ -103,8 +103,8 @@ fn run_job(entry: &Entry, executor: &dyn Executor) -> Result<serde_json::Value> 
         }
     }
     let report = match &entry.job {
-        Job::Simplify(a) => executor.simplify(&a.job()),
-        Job::Refine(a) => executor.refine(&a.job()),
+        Job::Simplify(a) => executor.simplify(&a.job()).and_then(|r| Ok(serde_json::to_value(r)?)),
+        Job::Refine(a) => executor.refine(&a.job()).and_then(|r| Ok(serde_json::to_value(r)?)),
     };
     if report.is_err() {
         // Whatever the job wrote before it failed would make a rerun skip it.
@@ -112,7 +112,7 @@ fn run_job(entry: &Entry, executor: &dyn Executor) -> Result<serde_json::Value> 
             let _ = std::fs::remove_file(output);
         }
     }
-    Ok(serde_json::Value::Object(report?))
+    report
 }
 
 /// Runs a batch.

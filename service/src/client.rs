@@ -17,7 +17,7 @@ use crate::executor::{
 };
 use crate::proto;
 use crate::proto::mesh_lod_client::MeshLodClient;
-use crate::report::{self, Report};
+use crate::report::{self, PredictReport, RefineReport, SimplifyReport};
 
 /// The server address as tonic wants it: `host:port` gains `http://`.
 pub fn endpoint_uri(server: &str) -> String {
@@ -145,7 +145,7 @@ fn status_error(status: tonic::Status) -> anyhow::Error {
 }
 
 impl Executor for Remote {
-    fn simplify(&self, job: &SimplifyJob) -> Result<Report> {
+    fn simplify(&self, job: &SimplifyJob) -> Result<SimplifyReport> {
         check_simplify_outputs(job)?;
         let mesh = load(&job.input)?;
         let options = proto::SimplifyOptions { return_progressive: job.pm.is_some(), ..job.options };
@@ -190,7 +190,7 @@ impl Executor for Remote {
         finish_simplify(job, &out, progressive.as_ref(), pm_file, &stats, response.hausdorff.as_ref())
     }
 
-    fn refine(&self, job: &RefineJob) -> Result<Report> {
+    fn refine(&self, job: &RefineJob) -> Result<RefineReport> {
         job.write.check(meshlod_engine::io::output_format(&job.output)?)?;
         let mesh = load(&job.input)?;
         let (input, output_format) = input_of(&mesh)?;
@@ -211,7 +211,7 @@ impl Executor for Remote {
         finish_refine(job, &out, &stats)
     }
 
-    fn predict(&self, job: &PredictJob) -> Result<Report> {
+    fn predict(&self, job: &PredictJob) -> Result<PredictReport> {
         let mesh = load(&job.input)?;
         let request = proto::PredictRequest {
             subject: Some(proto::predict_request::Subject::Input(input_of(&mesh)?.0)),

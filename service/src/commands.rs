@@ -17,7 +17,7 @@ use meshlod_engine::validate::{clean, validate};
 use meshlod_service::client::Remote;
 use meshlod_service::convert::MeshLimits;
 use meshlod_service::executor::{Executor, Local, load};
-use meshlod_service::report::{self, Report};
+use meshlod_service::report;
 use meshlod_service::server::{ServerConfig, serve_with_listener, shutdown_signal};
 use serde_json::Value;
 
@@ -99,45 +99,26 @@ pub(crate) fn sig(x: f64) -> String {
     if text.contains('.') { text.trim_end_matches('0').trim_end_matches('.').to_string() } else { text }
 }
 
-fn num(report: &Report, key: &str) -> f64 {
-    report.get(key).and_then(Value::as_f64).unwrap_or(f64::NAN)
-}
-
-/// A value for people: strings without quotes, floats with 6 significant digits.
-fn shown(value: &Value) -> String {
-    match value {
-        Value::String(s) => s.clone(),
-        Value::Null => "-".into(),
-        Value::Number(n) if n.is_f64() => sig(n.as_f64().unwrap_or(f64::NAN)),
-        Value::Array(items) => items.iter().map(shown).collect::<Vec<_>>().join(" "),
-        other => other.to_string(),
-    }
-}
-
-fn text(report: &Report, key: &str) -> String {
-    report.get(key).map_or_else(|| "-".into(), shown)
-}
-
-fn print_json(report: &Report) -> Result<()> {
+fn print_json(report: &impl serde::Serialize) -> Result<()> {
     out!("{}", serde_json::to_string_pretty(report)?);
     Ok(())
 }
 
-fn warn_all(report: &Report) {
-    for w in report.get("warnings").and_then(Value::as_array).into_iter().flatten() {
-        eprintln!("meshlod: warning: {}", w.as_str().unwrap_or_default());
+fn warn_all(warnings: &[String]) {
+    for w in warnings {
+        eprintln!("meshlod: warning: {w}");
     }
 }
 
-fn print_hausdorff_line(report: &Report) -> Result<()> {
-    if report.contains_key("hausdorff_paper") {
+fn print_hausdorff_line(measured: Option<&report::HausdorffKeys>) -> Result<()> {
+    if let Some(d) = measured {
         out!(
             "  Hausdorff ≤ {} paper units (≥ {}, certified; {} % of the diagonal); mean {}, rms {}",
-            sig(num(report, "hausdorff_paper")),
-            sig(num(report, "hausdorff_lower_paper")),
-            sig(num(report, "hausdorff_diag_pct")),
-            sig(num(report, "mean_paper")),
-            sig(num(report, "rms_paper")),
+            sig(d.hausdorff_paper),
+            sig(d.hausdorff_lower_paper),
+            sig(d.hausdorff_diag_pct),
+            sig(d.mean_paper),
+            sig(d.rms_paper),
         );
     }
     Ok(())
@@ -147,22 +128,20 @@ fn print_hausdorff_line(report: &Report) -> Result<()> {
 fn run_simplify(executor: &dyn Executor, args: &SimplifyArgs) -> Result<()> {
     let job = args.job();
     let report = with_progress(format!("simplifying {}", args.input.display()), || executor.simplify(&job))?;
-    warn_all(&report);
+    warn_all(&report.warnings);
     if args.json {
         return print_json(&report);
     }
     // A count the text names only when it is not zero: ", 1 {one}" or ", N {many}".
-    let counted = |key: &str, one: &str, many: &str| match text(&report, key).as_str() {
-        "0" => String::new(),
-        "1" => format!(", 1 {one}"),
+    let counted = |n: u32, one: &str, many: &str| match n {
+        0 => String::new(),
+        1 => format!(", 1 {one}"),
         n => format!(", {n} {many}"),
     };
     // The rules behind the refusals, most first: what held the edges of a run that stopped
     // above its target.
-    let mut rules: Vec<(u64, &str)> = report["refused"]
-        .as_object()
-        .map(|r| r.iter().filter_map(|(rule, n)| n.as_u64().filter(|&n| n > 0).map(|n| (n, rule.as_str()))).collect())
-        .unwrap_or_default();
+    let mut rules: Vec<(u64, &str)> =
+        report.refused.by_rule().into_iter().filter(|&(_, n)| n > 0).map(|(r, n)| (n, r)).collect();
     rules.sort_by(|x, y| y.0.cmp(&x.0).then(x.1.cmp(y.1)));
     let rules = if rules.is_empty() {
         String::new()
@@ -170,48 +149,44 @@ fn run_simplify(executor: &dyn Executor, args: &SimplifyArgs) -> Result<()> {
         let named: Vec<String> = rules.iter().map(|(n, rule)| format!("{n} {}", rule.replace('_', " "))).collect();
         format!(" ({})", named.join(", "))
     };
-    let holes = counted("holes_closed", "triangular hole closed", "triangular holes closed");
-    let parts = counted("parts_removed", "part taken out", "parts taken out");
-    let copies = counted("dropped_duplicate_faces", "duplicate face dropped", "duplicate faces dropped");
-    let backs = counted("back_faces", "back face kept with its front", "back faces kept with their fronts");
-    let halves = if report.get("halves").and_then(Value::as_bool) == Some(true) { ", in two halves first" } else { "" };
+    let holes = counted(report.holes_closed, "triangular hole closed", "triangular holes closed");
+    let parts = counted(report.parts_removed, "part taken out", "parts taken out");
+    let copies = counted(report.dropped_duplicate_faces, "duplicate face dropped", "duplicate faces dropped");
+    let backs = counted(report.back_faces, "back face kept with its front", "back faces kept with their fronts");
+    let halves = if report.halves { ", in two halves first" } else { "" };
     out!(
         "{} → {} faces, {} → {} vertices ({}): {} collapses, {} refused{rules}, {} frozen vertices{holes}{parts}{copies}{backs}{halves}",
-        text(&report, "faces_in"),
-        text(&report, "faces_out"),
-        text(&report, "vertices_in"),
-        text(&report, "vertices_out"),
-        text(&report, "stop_reason").replace('_', " "),
-        text(&report, "collapses"),
-        text(&report, "rejected"),
-        text(&report, "frozen_vertices"),
+        report.faces_in,
+        report.faces_out,
+        report.vertices_in,
+        report.vertices_out,
+        report.stop_reason.replace('_', " "),
+        report.collapses,
+        report.rejected,
+        report.frozen_vertices,
     );
-    let w = if report.get("w").is_some_and(Value::is_null) {
-        String::new()
-    } else {
-        format!(" w = {}", text(&report, "w"))
-    };
+    let w = report.w.map_or(String::new(), |w| format!(" w = {}", sig(w)));
     out!(
         "  {}{w} ({}), {} placement, guard {}; {} s → {}",
-        text(&report, "metric"),
-        text(&report, "w_source"),
-        text(&report, "placement"),
-        text(&report, "guard"),
-        sig(num(&report, "seconds")),
+        report.metric,
+        report.w_source,
+        report.placement,
+        sig(report.guard),
+        sig(report.seconds),
         args.output.display()
     );
-    print_hausdorff_line(&report)?;
-    if let (Some(pm), true) = (&args.pm, report.contains_key("pm_bytes")) {
-        let materials = if num(&report, "pm_materials_bytes") > 0.0 {
-            format!(", {} of them materials and images", text(&report, "pm_materials_bytes"))
+    print_hausdorff_line(report.hausdorff.as_ref())?;
+    if let (Some(pm), Some(keys)) = (&args.pm, &report.progressive) {
+        let materials = if keys.pm_materials_bytes > 0 {
+            format!(", {} of them materials and images", keys.pm_materials_bytes)
         } else {
             String::new()
         };
         out!(
             "  progressive mesh: {} splits, {} bytes{materials} ({} bytes per split) → {}",
-            text(&report, "pm_splits"),
-            text(&report, "pm_bytes"),
-            sig(num(&report, "bytes_per_split")),
+            keys.pm_splits,
+            keys.pm_bytes,
+            sig(keys.bytes_per_split),
             pm.display()
         );
     }
@@ -222,29 +197,29 @@ fn run_simplify(executor: &dyn Executor, args: &SimplifyArgs) -> Result<()> {
 fn run_refine(executor: &dyn Executor, args: &RefineArgs) -> Result<()> {
     let job = args.job();
     let report = with_progress(format!("refining {}", args.input.display()), || executor.refine(&job))?;
-    warn_all(&report);
+    warn_all(&report.warnings);
     if args.json {
         return print_json(&report);
     }
     out!(
         "{} → {} faces ({}): ETC {} ({}), {} edges split, {} collapses; {} s → {}",
-        text(&report, "faces_in"),
-        text(&report, "faces_out"),
-        text(&report, "mode"),
-        sig(num(&report, "etc")),
-        text(&report, "etc_source"),
-        text(&report, "split_edges"),
-        text(&report, "collapses"),
-        sig(num(&report, "seconds")),
+        report.faces_in,
+        report.faces_out,
+        report.mode,
+        sig(report.etc),
+        report.etc_source,
+        report.split_edges,
+        report.collapses,
+        sig(report.seconds),
         args.output.display()
     );
-    if report.contains_key("reference_hausdorff_paper") {
+    if let Some(d) = &report.reference {
         out!(
             "  against {}: Hausdorff ≤ {} paper units (≥ {}, certified), mean {}",
             args.reference.as_deref().unwrap_or(Path::new("the reference")).display(),
-            sig(num(&report, "reference_hausdorff_paper")),
-            sig(num(&report, "reference_hausdorff_lower_paper")),
-            sig(num(&report, "reference_mean_paper")),
+            sig(d.reference_hausdorff_paper),
+            sig(d.reference_hausdorff_lower_paper),
+            sig(d.reference_mean_paper),
         );
     }
     Ok(())
@@ -256,22 +231,21 @@ fn run_predict(executor: &dyn Executor, args: &PredictArgs) -> Result<()> {
     if args.json {
         return print_json(&report);
     }
-    let classes = report.get("classes").and_then(Value::as_array).cloned().unwrap_or_default();
-    let probabilities = report.get("probabilities").and_then(Value::as_array).cloned().unwrap_or_default();
-    let spread: Vec<String> = classes
+    let spread: Vec<String> = report
+        .classes
         .iter()
-        .zip(&probabilities)
-        .map(|(c, p)| format!("{}: {}", c, sig(p.as_f64().unwrap_or(f64::NAN))))
+        .zip(&report.probabilities)
+        .map(|(c, p)| format!("{}: {}", sig(*c), sig(f64::from(*p))))
         .collect();
     out!(
         "{} → {} faces: w = {} (probabilities {}), ETC ≈ {} to {}; model {}",
-        text(&report, "faces_in"),
-        text(&report, "target_faces"),
-        text(&report, "w"),
+        report.faces_in,
+        report.target_faces,
+        sig(report.w),
         spread.join(", "),
-        sig(num(&report, "etc")),
-        text(&report, "etc_mode"),
-        text(&report, "model_version"),
+        sig(report.etc),
+        report.etc_mode,
+        report.model_version,
     );
     Ok(())
 }

@@ -16,7 +16,7 @@ use meshlod_predictor::Predictor;
 
 use crate::error::JobError;
 use crate::proto;
-use crate::report::{self, Report};
+use crate::report::{self, PredictReport, RefineReport, SimplifyReport};
 
 /// One simplification of a file.
 #[derive(Debug, Clone)]
@@ -62,11 +62,11 @@ pub struct PredictJob {
 /// Runs jobs: here, or on a server. Shared by the threads of a batch.
 pub trait Executor: Sync {
     /// Runs a simplification and writes its outputs.
-    fn simplify(&self, job: &SimplifyJob) -> Result<Report>;
+    fn simplify(&self, job: &SimplifyJob) -> Result<SimplifyReport>;
     /// Runs a refinement and writes its output.
-    fn refine(&self, job: &RefineJob) -> Result<Report>;
+    fn refine(&self, job: &RefineJob) -> Result<RefineReport>;
     /// Asks the predictor.
-    fn predict(&self, job: &PredictJob) -> Result<Report>;
+    fn predict(&self, job: &PredictJob) -> Result<PredictReport>;
 }
 
 /// Reads a job's input mesh.
@@ -95,10 +95,10 @@ pub fn finish_simplify(
     pm_file: Option<&[u8]>,
     stats: &proto::SimplifyStats,
     measured: Option<&proto::HausdorffReport>,
-) -> Result<Report> {
+) -> Result<SimplifyReport> {
     write_mesh_with(&job.output, mesh, &job.write)?;
     let mut report = report::simplify(stats, measured);
-    add_unwritten_warning(&mut report, &job.output, mesh);
+    add_unwritten_warning(&mut report.warnings, &job.output, mesh);
     if let Some(path) = &job.pm {
         let pm = progressive.context("the run returned no progressive mesh")?;
         let bytes = match pm_file {
@@ -107,28 +107,26 @@ pub fn finish_simplify(
             None => encode(pm),
         };
         std::fs::write(path, &bytes).with_context(|| format!("writing {}", path.display()))?;
-        report.extend(report::progressive(pm, bytes.len()));
+        report.progressive = Some(report::progressive(pm, bytes.len()));
     }
     Ok(report)
 }
 
-/// Adds to the report's warnings what the output file's format could not hold of `mesh`.
-fn add_unwritten_warning(report: &mut Report, output: &std::path::Path, mesh: &Mesh) {
+/// Adds to a report's warnings what the output file's format could not hold of `mesh`.
+fn add_unwritten_warning(warnings: &mut Vec<String>, output: &std::path::Path, mesh: &Mesh) {
     let warning = output_format(output).ok().and_then(|format| meshlod_engine::io::unwritten_warning(format, mesh));
-    if let (Some(warning), Some(list)) = (warning, report.get_mut("warnings").and_then(|w| w.as_array_mut())) {
-        list.push(warning.into());
-    }
+    warnings.extend(warning);
 }
 
 /// The end of every refine job: writes the mesh, measures it against the reference if asked.
-pub fn finish_refine(job: &RefineJob, mesh: &Mesh, stats: &proto::RefineStats) -> Result<Report> {
+pub fn finish_refine(job: &RefineJob, mesh: &Mesh, stats: &proto::RefineStats) -> Result<RefineReport> {
     write_mesh_with(&job.output, mesh, &job.write)?;
     let mut report = report::refine(stats);
-    add_unwritten_warning(&mut report, &job.output, mesh);
+    add_unwritten_warning(&mut report.warnings, &job.output, mesh);
     if let Some(reference) = &job.reference {
         let reference_mesh = load(reference)?;
         let d = hausdorff(&reference_mesh, mesh, &HausdorffOptions::default())?;
-        report.extend(report::reference(&d));
+        report.reference = Some(report::reference(&d));
     }
     Ok(report)
 }
@@ -177,7 +175,7 @@ fn job_error(e: JobError, input: &Path) -> anyhow::Error {
 }
 
 impl Executor for Local {
-    fn simplify(&self, job: &SimplifyJob) -> Result<Report> {
+    fn simplify(&self, job: &SimplifyJob) -> Result<SimplifyReport> {
         check_simplify_outputs(job)?;
         let mesh = load(&job.input)?;
         let options = proto::SimplifyOptions { return_progressive: job.pm.is_some(), ..job.options };
@@ -188,7 +186,7 @@ impl Executor for Local {
         finish_simplify(job, &run.result.mesh, progressive, None, &run.stats, run.hausdorff.as_ref())
     }
 
-    fn refine(&self, job: &RefineJob) -> Result<Report> {
+    fn refine(&self, job: &RefineJob) -> Result<RefineReport> {
         job.write.check(output_format(&job.output)?)?;
         let mesh = load(&job.input)?;
         let predictor = self.predictor_if(job.request.etc_auto)?;
@@ -197,7 +195,7 @@ impl Executor for Local {
         finish_refine(job, &result.mesh, &stats)
     }
 
-    fn predict(&self, job: &PredictJob) -> Result<Report> {
+    fn predict(&self, job: &PredictJob) -> Result<PredictReport> {
         let mesh = load(&job.input)?;
         let predictor = self.predictor()?;
         let response = crate::jobs::predict_mesh(&predictor, &mesh, job.target_faces, job.target_ratio)
