@@ -15,6 +15,7 @@ use meshlod_engine::io::WriteOptions;
 use meshlod_service::convert::MeshLimits;
 use meshlod_service::executor::{PredictJob, RefineJob, SimplifyJob};
 use meshlod_service::proto;
+use meshlod_service::request::{SimplifyRequest, WChoice};
 
 use crate::samples::SamplesArgs;
 
@@ -340,46 +341,61 @@ pub struct SimplifyArgs {
 impl SimplifyArgs {
     /// The job these flags ask for, its options as the contract has them.
     pub fn job(&self) -> SimplifyJob {
-        let options = proto::SimplifyOptions {
-            target_faces: self.faces,
-            target_ratio: removed_fraction(self.ratio, self.keep),
+        use meshlod_engine::simplify::{
+            AttributeWeights, BoundaryMode, Metric, NormalUpdate, Placement, SimplifyOptions,
+        };
+        let defaults = SimplifyOptions::default();
+        let target_ratio = removed_fraction(self.ratio, self.keep);
+        let w = match self.w {
+            WArg::Value(w) => WChoice::Given(w),
+            WArg::Auto => WChoice::Auto,
+            WArg::Search => WChoice::Search,
+        };
+        let options = SimplifyOptions {
+            target_faces: self.faces.map(|n| n as usize),
+            // Neither target: the engine's default share.
+            target_ratio: if self.faces.is_none() && target_ratio.is_none() {
+                defaults.target_ratio
+            } else {
+                target_ratio
+            },
             max_error: self.max_error,
             metric: match self.metric {
-                MetricArg::Qfvp => proto::Metric::Qfvp,
-                MetricArg::Qem => proto::Metric::Qem,
-                MetricArg::Melax => proto::Metric::Melax,
-            } as i32,
-            w: match self.w {
-                WArg::Value(w) => Some(w),
-                WArg::Auto | WArg::Search => None,
+                // (w is 0 here while the predictor or the search chooses it.)
+                MetricArg::Qfvp => Metric::Qfvp { w: if let WChoice::Given(w) = w { w } else { 0.0 } },
+                MetricArg::Qem => Metric::Qem,
+                MetricArg::Melax => Metric::Melax,
             },
-            w_auto: self.w == WArg::Auto,
-            w_search: self.w == WArg::Search,
             placement: match self.placement {
-                PlacementArg::Auto => proto::Placement::Unspecified,
-                PlacementArg::Optimal => proto::Placement::Optimal,
-                PlacementArg::Paper => proto::Placement::Paper,
-                PlacementArg::Endpoint => proto::Placement::Endpoint,
-            } as i32,
+                PlacementArg::Auto => Placement::Auto,
+                PlacementArg::Optimal => Placement::Optimal,
+                PlacementArg::Paper => Placement::Paper,
+                PlacementArg::Endpoint => Placement::Endpoint,
+            },
             normals: match self.normals {
-                NormalsArg::Linear => proto::NormalUpdate::Linear,
-                NormalsArg::Recompute => proto::NormalUpdate::Recompute,
-            } as i32,
+                NormalsArg::Linear => NormalUpdate::Linear,
+                NormalsArg::Recompute => NormalUpdate::Recompute,
+            },
             boundary: match (self.boundary, self.lock_border) {
-                (BoundaryArg::Preserve, false) => proto::BoundaryMode::Preserve,
-                _ => proto::BoundaryMode::Lock,
-            } as i32,
+                (BoundaryArg::Preserve, false) => BoundaryMode::Preserve,
+                _ => BoundaryMode::Lock,
+            },
             lock_seams: self.lock_seams,
-            max_normal_change_degrees: self.max_normal_change,
-            return_progressive: self.pm.is_some(),
-            compute_hausdorff: self.hausdorff,
-            guard: self.guard,
-            distance_term: self.distance_term,
-            progressive_lossless: self.pm_lossless,
-            attribute_weights: self.attribute_weights,
+            max_normal_change_degrees: self.max_normal_change.unwrap_or(defaults.max_normal_change_degrees),
+            record_progressive: self.pm.is_some(),
+            guard: self.guard.unwrap_or(defaults.guard),
+            distance_term: self.distance_term.unwrap_or(defaults.distance_term),
+            attribute_weights: self.attribute_weights.map_or(defaults.attribute_weights, |w| AttributeWeights {
+                uv: w.uv,
+                normal: w.normal,
+                color: w.color,
+            }),
             prune: self.prune,
-            whole: self.whole,
+            halves: !self.whole,
+            ..defaults
         };
+        let options =
+            SimplifyRequest { options, w, compute_hausdorff: self.hausdorff, progressive_lossless: self.pm_lossless };
         SimplifyJob {
             input: self.input.clone(),
             output: self.output.clone(),

@@ -148,7 +148,8 @@ impl Executor for Remote {
     fn simplify(&self, job: &SimplifyJob) -> Result<SimplifyReport> {
         check_simplify_outputs(job)?;
         let mesh = load(&job.input)?;
-        let options = proto::SimplifyOptions { return_progressive: job.pm.is_some(), ..job.options };
+        let request = job.request();
+        let options = proto::SimplifyOptions::from(&request);
         let mut client = self.client.clone();
         let response = self.runtime.block_on(async {
             // Meshes over 32 MiB go up in 1 MiB chunks (SimplifyUpload) instead of one message:
@@ -185,7 +186,7 @@ impl Executor for Remote {
         let mut stats = response.stats.unwrap_or_default();
         // What the input file had that the mesh sent up could not say (the server reads the mesh,
         // not the file), where a local run says it: after the options' warnings.
-        let after = crate::jobs::simplify_warnings(&options).len().min(stats.warnings.len());
+        let after = crate::jobs::simplify_warnings(&request).len().min(stats.warnings.len());
         add_input_warnings(&mut stats.warnings, &mesh, after);
         finish_simplify(job, &out, progressive.as_ref(), pm_file, &stats, response.hausdorff.as_ref())
     }

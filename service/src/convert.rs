@@ -14,6 +14,7 @@ use meshlod_engine::{Mesh, MeshError};
 use tonic::Status;
 
 use crate::error::{ErrorKind, JobError};
+use crate::request::{SimplifyRequest, WChoice};
 
 use crate::proto;
 
@@ -422,6 +423,82 @@ impl TryFrom<&proto::SimplifyOptions> for SimplifyOptions {
     }
 }
 
+/// The jobs' request from the contract's options: the engine's options, and how w is chosen
+/// (`w_auto` and `w_search` exclude each other).
+impl TryFrom<&proto::SimplifyOptions> for SimplifyRequest {
+    type Error = JobError;
+
+    fn try_from(o: &proto::SimplifyOptions) -> Result<SimplifyRequest, JobError> {
+        if o.w_auto && o.w_search {
+            return Err(JobError::invalid("options.w_search", "not together with options.w_auto"));
+        }
+        let w = match (o.w_auto, o.w_search) {
+            (true, _) => WChoice::Auto,
+            (_, true) => WChoice::Search,
+            _ => WChoice::Given(o.w.unwrap_or(0.0)),
+        };
+        Ok(SimplifyRequest {
+            options: SimplifyOptions::try_from(o)?,
+            w,
+            compute_hausdorff: o.compute_hausdorff,
+            progressive_lossless: o.progressive_lossless,
+        })
+    }
+}
+
+/// The contract's options for a request (what a client sends): every option set, so the server
+/// runs what the request says whatever its own defaults.
+impl From<&SimplifyRequest> for proto::SimplifyOptions {
+    fn from(r: &SimplifyRequest) -> proto::SimplifyOptions {
+        let o = &r.options;
+        let weights = o.attribute_weights;
+        proto::SimplifyOptions {
+            target_faces: o.target_faces.map(|n| u32::try_from(n).unwrap_or(u32::MAX)),
+            target_ratio: o.target_ratio,
+            max_error: o.max_error,
+            metric: match o.metric {
+                Metric::Qfvp { .. } => proto::Metric::Qfvp,
+                Metric::Qem => proto::Metric::Qem,
+                Metric::Melax => proto::Metric::Melax,
+            } as i32,
+            w: match r.w {
+                WChoice::Given(w) => Some(w),
+                WChoice::Auto | WChoice::Search => None,
+            },
+            w_auto: r.w == WChoice::Auto,
+            w_search: r.w == WChoice::Search,
+            placement: match o.placement {
+                Placement::Auto => proto::Placement::Unspecified,
+                Placement::Optimal => proto::Placement::Optimal,
+                Placement::Paper => proto::Placement::Paper,
+                Placement::Endpoint => proto::Placement::Endpoint,
+            } as i32,
+            normals: match o.normals {
+                NormalUpdate::Linear => proto::NormalUpdate::Linear,
+                NormalUpdate::Recompute => proto::NormalUpdate::Recompute,
+            } as i32,
+            boundary: match o.boundary {
+                BoundaryMode::Preserve => proto::BoundaryMode::Preserve,
+                BoundaryMode::Lock => proto::BoundaryMode::Lock,
+            } as i32,
+            lock_seams: o.lock_seams,
+            max_normal_change_degrees: Some(o.max_normal_change_degrees),
+            return_progressive: o.record_progressive,
+            compute_hausdorff: r.compute_hausdorff,
+            guard: Some(o.guard),
+            distance_term: Some(o.distance_term),
+            progressive_lossless: r.progressive_lossless,
+            attribute_weights: (weights != Default::default()).then_some(proto::AttributeWeights {
+                uv: weights.uv,
+                normal: weights.normal,
+                color: weights.color,
+            }),
+            prune: o.prune,
+            whole: !o.halves,
+        }
+    }
+}
+
 /// The engine's refusals by rule, as the contract counts them.
 pub fn refusals_to_proto(r: &meshlod_engine::simplify::Refusals) -> proto::Refusals {
     proto::Refusals {
@@ -469,6 +546,36 @@ pub fn hausdorff_options(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_request_goes_to_the_contract_and_back_unchanged() {
+        let sent = proto::SimplifyOptions {
+            target_ratio: Some(0.8),
+            metric: proto::Metric::Qem as i32,
+            w: Some(1.5),
+            placement: proto::Placement::Paper as i32,
+            normals: proto::NormalUpdate::Recompute as i32,
+            boundary: proto::BoundaryMode::Lock as i32,
+            guard: Some(2.0),
+            attribute_weights: Some(proto::AttributeWeights { uv: 0.3, normal: 0.0, color: 0.1 }),
+            compute_hausdorff: true,
+            prune: true,
+            whole: true,
+            ..Default::default()
+        };
+        let request = SimplifyRequest::try_from(&sent).unwrap();
+        assert_eq!(request.w, WChoice::Given(1.5), "the w given is kept, for the warning it draws with QEM");
+        let back = SimplifyRequest::try_from(&proto::SimplifyOptions::from(&request)).unwrap();
+        assert_eq!(format!("{back:?}"), format!("{request:?}"));
+        for (auto, search) in [(true, false), (false, true)] {
+            let o = proto::SimplifyOptions { w_auto: auto, w_search: search, ..Default::default() };
+            let r = SimplifyRequest::try_from(&o).unwrap();
+            assert_eq!(proto::SimplifyOptions::from(&r).w_auto, auto);
+            assert_eq!(proto::SimplifyOptions::from(&r).w_search, search);
+        }
+        let both = proto::SimplifyOptions { w_auto: true, w_search: true, ..Default::default() };
+        assert_eq!(SimplifyRequest::try_from(&both).unwrap_err().field, "options.w_search");
+    }
 
     #[test]
     fn a_job_error_and_its_status_say_the_same() {

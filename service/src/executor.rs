@@ -17,6 +17,7 @@ use meshlod_predictor::Predictor;
 use crate::error::JobError;
 use crate::proto;
 use crate::report::{self, PredictReport, RefineReport, SimplifyReport};
+use crate::request::{SimplifyRequest, WChoice};
 
 /// One simplification of a file.
 #[derive(Debug, Clone)]
@@ -27,10 +28,20 @@ pub struct SimplifyJob {
     pub output: PathBuf,
     /// How the output is written.
     pub write: WriteOptions,
-    /// The options, as the contract has them (`return_progressive` is set from `pm`).
-    pub options: proto::SimplifyOptions,
+    /// What to do, in the engine's terms (whether the progressive mesh is recorded is set from
+    /// `pm`).
+    pub options: SimplifyRequest,
     /// Where to write the progressive mesh, if anywhere.
     pub pm: Option<PathBuf>,
+}
+
+impl SimplifyJob {
+    /// The request as the job runs it: the progressive mesh recorded when a `.pm` is asked for.
+    pub fn request(&self) -> SimplifyRequest {
+        let mut request = self.options.clone();
+        request.options.record_progressive = self.pm.is_some();
+        request
+    }
 }
 
 /// One refinement of a file.
@@ -178,10 +189,10 @@ impl Executor for Local {
     fn simplify(&self, job: &SimplifyJob) -> Result<SimplifyReport> {
         check_simplify_outputs(job)?;
         let mesh = load(&job.input)?;
-        let options = proto::SimplifyOptions { return_progressive: job.pm.is_some(), ..job.options };
-        let predictor = self.predictor_if(options.w_auto)?;
+        let request = job.request();
+        let predictor = self.predictor_if(request.w == WChoice::Auto)?;
         let run =
-            crate::jobs::simplify(&mesh, &options, predictor.as_deref(), None).map_err(|e| job_error(e, &job.input))?;
+            crate::jobs::simplify(&mesh, &request, predictor.as_deref(), None).map_err(|e| job_error(e, &job.input))?;
         let progressive = run.result.progressive.as_ref();
         finish_simplify(job, &run.result.mesh, progressive, None, &run.stats, run.hausdorff.as_ref())
     }

@@ -21,6 +21,7 @@ use meshlod_predictor::Predictor;
 use crate::convert::{self, engine_error};
 use crate::error::JobError;
 use crate::proto;
+pub use crate::request::{SimplifyRequest, WChoice};
 
 /// What [`simplify`] produced.
 #[derive(Debug)]
@@ -38,18 +39,19 @@ pub struct Simplification {
 }
 
 /// Options that are accepted but change nothing, said back to the caller.
-pub fn simplify_warnings(o: &proto::SimplifyOptions) -> Vec<String> {
-    let metric = proto::Metric::try_from(o.metric).unwrap_or(proto::Metric::Unspecified);
-    let quadric_w0 = matches!(metric, proto::Metric::Qem)
-        || (matches!(metric, proto::Metric::Unspecified | proto::Metric::Qfvp)
-            && !o.w_auto
-            && !o.w_search
-            && o.w.unwrap_or(0.0) == 0.0);
+pub fn simplify_warnings(r: &SimplifyRequest) -> Vec<String> {
+    let metric = r.options.metric;
+    let given = match r.w {
+        WChoice::Given(w) => w,
+        WChoice::Auto | WChoice::Search => 0.0,
+    };
+    let quadric_w0 =
+        matches!(metric, Metric::Qem) || (matches!(metric, Metric::Qfvp { .. }) && r.w == WChoice::Given(0.0));
     let mut out = Vec::new();
-    if matches!(metric, proto::Metric::Qem | proto::Metric::Melax) && (o.w.is_some_and(|w| w != 0.0) || o.w_auto) {
-        out.push(format!("w has no effect with the {} metric", metric.as_str_name().trim_start_matches("METRIC_")));
+    if matches!(metric, Metric::Qem | Metric::Melax) && (given != 0.0 || r.w == WChoice::Auto) {
+        out.push(format!("w has no effect with the {} metric", metric.name().to_uppercase()));
     }
-    if quadric_w0 && o.normals == proto::NormalUpdate::Recompute as i32 {
+    if quadric_w0 && r.options.normals == NormalUpdate::Recompute {
         out.push("normals recompute has no effect at w = 0: the vertex normals only enter QFVP's normal term".into());
     }
     out
@@ -63,23 +65,20 @@ pub fn lost_attributes(mesh: &Mesh, kept: &[&str], operation: &str) -> Option<St
     })
 }
 
-/// Simplifies `mesh` with the contract's options; `w_auto` asks `predictor`.
+/// Simplifies `mesh` as `r` asks; `WChoice::Auto` asks `predictor`.
 pub fn simplify(
     mesh: &Mesh,
-    o: &proto::SimplifyOptions,
+    r: &SimplifyRequest,
     predictor: Option<&Predictor>,
     cancel: Option<Arc<AtomicBool>>,
 ) -> Result<Simplification, JobError> {
-    if o.w_auto && o.w_search {
-        return Err(JobError::invalid("options.w_search", "not together with options.w_auto"));
-    }
     // Every option checked before any work, the predictor's included.
-    let mut options = SimplifyOptions::try_from(o)?;
+    let mut options = r.options.clone();
     options.validate().map_err(|e| engine_error(e, "options"))?;
     options.cancel = cancel;
-    let (w_source, model_version) = if o.w_search {
+    let (w_source, model_version) = if r.w == WChoice::Search {
         (proto::WSource::Searched, String::new())
-    } else if o.w_auto {
+    } else if r.w == WChoice::Auto {
         let predictor = predictor
             .ok_or_else(|| JobError::precondition("options.w_auto", "this server runs without a predictor model"))?;
         // The target the run will stop at, as the engine counts it.
@@ -93,7 +92,7 @@ pub fn simplify(
         (proto::WSource::Given, String::new())
     };
     // A search has measured its result already; `measured` keeps that for compute_hausdorff.
-    let (result, w_candidates, measured) = if o.w_search {
+    let (result, w_candidates, measured) = if r.w == WChoice::Search {
         let search = simplify_search_w(mesh, &options, &W_CLASSES).map_err(|e| engine_error(e, "options"))?;
         options.metric = Metric::Qfvp { w: search.w };
         let candidates = search.errors.iter().map(|&(w, hausdorff)| proto::WCandidate { w, hausdorff }).collect();
@@ -101,7 +100,7 @@ pub fn simplify(
     } else {
         (engine_simplify(mesh, &options).map_err(|e| engine_error(e, "options"))?, Vec::new(), None)
     };
-    let hausdorff = if o.compute_hausdorff {
+    let hausdorff = if r.compute_hausdorff {
         let d = match measured {
             Some(d) => d,
             None => {
@@ -130,10 +129,10 @@ pub fn simplify(
         w_candidates,
         guard: options.guard,
         distance_term: s.distance_term,
-        warnings: simplify_warnings(o)
+        warnings: simplify_warnings(r)
             .into_iter()
             .chain(mesh.corners.input_warnings())
-            .chain((o.return_progressive && s.back_faces > 0).then(|| {
+            .chain((options.record_progressive && s.back_faces > 0).then(|| {
                 format!(
                     "{} back faces (a double-sided sheet modelled with two faces): the result has both sides, \
                      the progressive mesh and its levels the one sheet",
@@ -157,7 +156,7 @@ pub fn simplify(
         },
         boundary: format!("{:?}", options.boundary).to_lowercase(),
     };
-    Ok(Simplification { result, stats, hausdorff, encoded: None, progressive_lossless: o.progressive_lossless })
+    Ok(Simplification { result, stats, hausdorff, encoded: None, progressive_lossless: r.progressive_lossless })
 }
 
 /// The refiner's options from the contract's request (its `input` is not read): the mode

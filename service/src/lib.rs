@@ -20,6 +20,7 @@ pub mod jobs;
 pub mod metrics;
 pub mod predict;
 pub mod report;
+pub mod request;
 pub mod server;
 pub mod stream_values;
 

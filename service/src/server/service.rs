@@ -111,7 +111,8 @@ impl MeshLodService {
             let mesh = mesh_from_input(request.input.as_ref(), "input", &limits, Some(cancel.clone()))?;
             let mut options = request.options.unwrap_or_default();
             options.return_progressive |= progressive;
-            let mut run = jobs::simplify(&mesh, &options, predictor.as_deref(), Some(cancel))?;
+            let request = jobs::SimplifyRequest::try_from(&options)?;
+            let mut run = jobs::simplify(&mesh, &request, predictor.as_deref(), Some(cancel))?;
             run.encoded = convert::encode_mesh(&run.result.mesh, format, &write)?;
             Ok(run)
         }
