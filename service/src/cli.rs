@@ -15,7 +15,7 @@ use meshlod_engine::io::WriteOptions;
 use meshlod_service::convert::MeshLimits;
 use meshlod_service::executor::{PredictJob, RefineJob, SimplifyJob};
 use meshlod_service::proto;
-use meshlod_service::request::{SimplifyRequest, WChoice};
+use meshlod_service::request::{EtcChoice, RefineRequest, SimplifyRequest, WChoice};
 
 use crate::samples::SamplesArgs;
 
@@ -440,22 +440,20 @@ pub struct RefineArgs {
 impl RefineArgs {
     /// The job these flags ask for.
     pub fn job(&self) -> RefineJob {
-        let request = proto::RefineRequest {
-            input: None,
+        use meshlod_engine::refine::RefineMode;
+        let request = RefineRequest {
             etc: match self.etc {
-                Some(Auto::Value(e)) => Some(e),
-                _ => None,
+                Some(Auto::Value(e)) => EtcChoice::Given(e),
+                Some(Auto::Auto) => EtcChoice::Auto,
+                None => EtcChoice::Search,
             },
-            target_faces: self.faces,
-            etc_auto: self.etc == Some(Auto::Auto),
-            mode: match self.mode {
-                None => proto::RefineMode::Unspecified,
-                Some(ModeArg::Simplify) => proto::RefineMode::Simplify,
-                Some(ModeArg::Subdivide) => proto::RefineMode::Subdivide,
-                Some(ModeArg::Both) => proto::RefineMode::Both,
-            } as i32,
-            rounds: Some(self.rounds),
-            ..Default::default()
+            target_faces: self.faces.map(|n| n as usize),
+            mode: self.mode.map(|m| match m {
+                ModeArg::Simplify => RefineMode::Simplify,
+                ModeArg::Subdivide => RefineMode::Subdivide,
+                ModeArg::Both => RefineMode::Both,
+            }),
+            rounds: self.rounds,
         };
         RefineJob {
             input: self.input.clone(),

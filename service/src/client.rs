@@ -197,8 +197,8 @@ impl Executor for Remote {
         let (input, output_format) = input_of(&mesh)?;
         let request = proto::RefineRequest {
             input: Some(input),
-            output_format: output_format.map_or(job.request.output_format, |f| f as i32),
-            ..job.request.clone()
+            output_format: output_format.map_or(0, |f| f as i32),
+            ..proto::RefineRequest::from(&job.request)
         };
         let mut client = self.client.clone();
         let response = self

@@ -9,12 +9,13 @@ use std::sync::atomic::AtomicBool;
 
 use meshlod_engine::io::{MeshFormat, ReadLimits, WriteOptions, read_mesh_bytes};
 use meshlod_engine::pm::{Hole, NO_VERTEX, ProgressiveMesh, StreamedSplit, VertexSplit};
+use meshlod_engine::refine::RefineMode;
 use meshlod_engine::simplify::{BoundaryMode, Metric, NormalUpdate, Placement, SimplifyOptions};
 use meshlod_engine::{Mesh, MeshError};
 use tonic::Status;
 
 use crate::error::{ErrorKind, JobError};
-use crate::request::{SimplifyRequest, WChoice};
+use crate::request::{EtcChoice, RefineRequest, SimplifyRequest, WChoice};
 
 use crate::proto;
 
@@ -446,6 +447,57 @@ impl TryFrom<&proto::SimplifyOptions> for SimplifyRequest {
     }
 }
 
+/// The jobs' refine request from the contract's: `etc` and `etc_auto` exclude each other, and so do
+/// `etc` and `target_faces` (the target is for `etc_auto` or the search).
+impl TryFrom<&proto::RefineRequest> for RefineRequest {
+    type Error = JobError;
+
+    fn try_from(r: &proto::RefineRequest) -> Result<RefineRequest, JobError> {
+        let etc = match (r.etc, r.etc_auto) {
+            (Some(_), true) => return Err(JobError::invalid("etc", "give etc or etc_auto, not both")),
+            (Some(_), false) if r.target_faces.is_some() => {
+                return Err(JobError::invalid(
+                    "etc",
+                    "give etc or target_faces, not both (or etc_auto with target_faces)",
+                ));
+            }
+            (Some(e), false) => EtcChoice::Given(e),
+            (None, true) => EtcChoice::Auto,
+            (None, false) => EtcChoice::Search,
+        };
+        let mode = match proto::RefineMode::try_from(r.mode) {
+            Ok(proto::RefineMode::Unspecified) => None,
+            Ok(proto::RefineMode::Simplify) => Some(RefineMode::Simplify),
+            Ok(proto::RefineMode::Subdivide) => Some(RefineMode::Subdivide),
+            Ok(proto::RefineMode::Both) => Some(RefineMode::Both),
+            Err(_) => return Err(invalid("mode", format!("unknown value {}", r.mode))),
+        };
+        Ok(RefineRequest { etc, target_faces: r.target_faces.map(|n| n as usize), mode, rounds: r.rounds.unwrap_or(1) })
+    }
+}
+
+/// The contract's refine request for a jobs' one (without its input and output format).
+impl From<&RefineRequest> for proto::RefineRequest {
+    fn from(r: &RefineRequest) -> proto::RefineRequest {
+        proto::RefineRequest {
+            etc: match r.etc {
+                EtcChoice::Given(e) => Some(e),
+                EtcChoice::Auto | EtcChoice::Search => None,
+            },
+            etc_auto: r.etc == EtcChoice::Auto,
+            target_faces: r.target_faces.map(|n| u32::try_from(n).unwrap_or(u32::MAX)),
+            mode: match r.mode {
+                None => proto::RefineMode::Unspecified,
+                Some(RefineMode::Simplify) => proto::RefineMode::Simplify,
+                Some(RefineMode::Subdivide) => proto::RefineMode::Subdivide,
+                Some(RefineMode::Both) => proto::RefineMode::Both,
+            } as i32,
+            rounds: Some(r.rounds),
+            ..Default::default()
+        }
+    }
+}
+
 /// The contract's options for a request (what a client sends): every option set, so the server
 /// runs what the request says whatever its own defaults.
 impl From<&SimplifyRequest> for proto::SimplifyOptions {
@@ -575,6 +627,22 @@ mod tests {
         }
         let both = proto::SimplifyOptions { w_auto: true, w_search: true, ..Default::default() };
         assert_eq!(SimplifyRequest::try_from(&both).unwrap_err().field, "options.w_search");
+    }
+
+    #[test]
+    fn a_refine_request_goes_to_the_contract_and_back_unchanged() {
+        for sent in [
+            proto::RefineRequest { etc: Some(1.5), rounds: Some(2), ..Default::default() },
+            proto::RefineRequest { etc_auto: true, target_faces: Some(900), ..Default::default() },
+            proto::RefineRequest { target_faces: Some(90), mode: proto::RefineMode::Both as i32, ..Default::default() },
+        ] {
+            let request = RefineRequest::try_from(&sent).unwrap();
+            assert_eq!(RefineRequest::try_from(&proto::RefineRequest::from(&request)).unwrap(), request);
+        }
+        let both = proto::RefineRequest { etc: Some(1.0), etc_auto: true, ..Default::default() };
+        assert_eq!(RefineRequest::try_from(&both).unwrap_err().field, "etc");
+        let bad_mode = proto::RefineRequest { etc: Some(1.0), mode: 9, ..Default::default() };
+        assert_eq!(RefineRequest::try_from(&bad_mode).unwrap_err().field, "mode");
     }
 
     #[test]

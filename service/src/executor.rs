@@ -17,7 +17,7 @@ use meshlod_predictor::Predictor;
 use crate::error::JobError;
 use crate::proto;
 use crate::report::{self, PredictReport, RefineReport, SimplifyReport};
-use crate::request::{SimplifyRequest, WChoice};
+use crate::request::{EtcChoice, RefineRequest, SimplifyRequest, WChoice};
 
 /// One simplification of a file.
 #[derive(Debug, Clone)]
@@ -53,8 +53,8 @@ pub struct RefineJob {
     pub output: PathBuf,
     /// How the output is written.
     pub write: WriteOptions,
-    /// The request, as the contract has it (its `input` is filled in by the executor).
-    pub request: proto::RefineRequest,
+    /// What to do, in the engine's terms.
+    pub request: RefineRequest,
     /// Measure the output against this mesh.
     pub reference: Option<PathBuf>,
 }
@@ -200,7 +200,7 @@ impl Executor for Local {
     fn refine(&self, job: &RefineJob) -> Result<RefineReport> {
         job.write.check(output_format(&job.output)?)?;
         let mesh = load(&job.input)?;
-        let predictor = self.predictor_if(job.request.etc_auto)?;
+        let predictor = self.predictor_if(job.request.etc == EtcChoice::Auto)?;
         let (result, stats) = crate::jobs::refine(&mesh, &job.request, predictor.as_deref(), None, usize::MAX)
             .map_err(|e| job_error(e, &job.input))?;
         finish_refine(job, &result.mesh, &stats)

@@ -21,7 +21,7 @@ use meshlod_predictor::Predictor;
 use crate::convert::{self, engine_error};
 use crate::error::JobError;
 use crate::proto;
-pub use crate::request::{SimplifyRequest, WChoice};
+pub use crate::request::{EtcChoice, RefineRequest, SimplifyRequest, WChoice};
 
 /// What [`simplify`] produced.
 #[derive(Debug)]
@@ -159,60 +159,45 @@ pub fn simplify(
     Ok(Simplification { result, stats, hausdorff, encoded: None, progressive_lossless: r.progressive_lossless })
 }
 
-/// The refiner's options from the contract's request (its `input` is not read): the mode
-/// inferred where unspecified, the ETC predicted where `etc_auto` asks for it. Also returns where
+/// The refiner's options for a request: the mode inferred where unset, the ETC predicted where
+/// `EtcChoice::Auto` asks for it. Also returns where
 /// the ETC comes from and the model's version when it was predicted.
 fn refine_options(
     mesh: &Mesh,
-    r: &proto::RefineRequest,
+    r: &RefineRequest,
     predictor: Option<&Predictor>,
 ) -> Result<(RefineOptions, &'static str, String), JobError> {
-    let mut etc = r.etc;
-    let mut target_faces = r.target_faces.map(|n| n as usize);
-    let mut model_version = String::new();
-    if r.etc_auto {
-        if r.etc.is_some() {
-            return Err(JobError::invalid("etc", "give etc or etc_auto, not both"));
+    let (mut etc, mut target_faces, mut model_version) = (None, r.target_faces, String::new());
+    let source = match r.etc {
+        EtcChoice::Given(e) => {
+            etc = Some(e);
+            "given"
         }
-        let predictor = predictor
-            .ok_or_else(|| JobError::precondition("etc_auto", "this server runs without a predictor model"))?;
-        let target =
-            target_faces.ok_or_else(|| JobError::invalid("target_faces", "etc_auto needs a target face count"))?;
-        let advice = crate::predict::advise(predictor, mesh, target).map_err(|e| JobError::internal(e.to_string()))?;
-        etc = Some(advice.etc);
-        target_faces = None;
-        model_version = advice.model_version;
-    } else if r.etc.is_some() && r.target_faces.is_some() {
-        return Err(JobError::invalid("etc", "give etc or target_faces, not both (or etc_auto with target_faces)"));
-    }
-    let mode = match proto::RefineMode::try_from(r.mode) {
-        Ok(proto::RefineMode::Simplify) => RefineMode::Simplify,
-        Ok(proto::RefineMode::Subdivide) => RefineMode::Subdivide,
-        Ok(proto::RefineMode::Both) => RefineMode::Both,
-        // The direction that reaches the target, or subdivision.
-        Ok(proto::RefineMode::Unspecified) => match r.target_faces {
-            Some(n) if (n as usize) < mesh.face_count() => RefineMode::Simplify,
-            _ => RefineMode::Subdivide,
-        },
-        Err(_) => return Err(JobError::invalid("mode", format!("unknown value {}", r.mode))),
+        EtcChoice::Auto => {
+            let predictor = predictor
+                .ok_or_else(|| JobError::precondition("etc_auto", "this server runs without a predictor model"))?;
+            let target =
+                target_faces.ok_or_else(|| JobError::invalid("target_faces", "etc_auto needs a target face count"))?;
+            let advice =
+                crate::predict::advise(predictor, mesh, target).map_err(|e| JobError::internal(e.to_string()))?;
+            (etc, target_faces, model_version) = (Some(advice.etc), None, advice.model_version);
+            "predicted"
+        }
+        EtcChoice::Search => "searched",
     };
-    let source = if r.etc_auto {
-        "predicted"
-    } else if r.etc.is_some() {
-        "given"
-    } else {
-        "searched"
-    };
-    let options =
-        RefineOptions { etc, target_faces, mode, rounds: r.rounds.unwrap_or(1), cancel: None, max_faces: None };
+    // Unset: the direction that reaches the target, or subdivision.
+    let mode = r.mode.unwrap_or(match r.target_faces {
+        Some(n) if n < mesh.face_count() => RefineMode::Simplify,
+        _ => RefineMode::Subdivide,
+    });
+    let options = RefineOptions { etc, target_faces, mode, rounds: r.rounds, cancel: None, max_faces: None };
     Ok((options, source, model_version))
 }
 
-/// Refines `mesh` as the contract's request says (its `input` is not read); the result may have at
-/// most `max_faces` faces.
+/// Refines `mesh` as `r` says; the result may have at most `max_faces` faces.
 pub fn refine(
     mesh: &Mesh,
-    r: &proto::RefineRequest,
+    r: &RefineRequest,
     predictor: Option<&Predictor>,
     cancel: Option<Arc<AtomicBool>>,
     max_faces: usize,

@@ -2,6 +2,7 @@
 //! fills it from its flags, the server from the contract's options (`crate::convert`), and a
 //! client turns it into the contract's options to send.
 
+use meshlod_engine::refine::RefineMode;
 use meshlod_engine::simplify::SimplifyOptions;
 
 /// How a simplification's w is chosen.
@@ -29,4 +30,28 @@ pub struct SimplifyRequest {
     pub compute_hausdorff: bool,
     /// The `.pm` file with every float as it is, rather than the compact form.
     pub progressive_lossless: bool,
+}
+
+/// How a refinement's ETC (energy threshold coefficient) is chosen.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum EtcChoice {
+    /// The one given.
+    Given(f64),
+    /// The predictor's estimate for the target face count.
+    Auto,
+    /// Searched: the ETC that reaches the target face count.
+    Search,
+}
+
+/// A refinement as the jobs take it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RefineRequest {
+    /// How the ETC is chosen.
+    pub etc: EtcChoice,
+    /// Faces to reach (with `Auto` or `Search`).
+    pub target_faces: Option<usize>,
+    /// What to do; `None`: the direction that reaches the target, else subdivision.
+    pub mode: Option<RefineMode>,
+    /// Subdivision rounds.
+    pub rounds: u32,
 }

@@ -264,9 +264,9 @@ impl MeshLod for MeshLodService {
             .run("Refine", deadline, move |cancel| {
                 let format = convert::output_format(request.output_format, "output_format")?;
                 let write = convert::write_options(request.quantize_output, format)?;
+                let job = jobs::RefineRequest::try_from(&request)?;
                 let mesh = mesh_from_input(request.input.as_ref(), "input", &limits, Some(cancel.clone()))?;
-                let (result, stats) =
-                    jobs::refine(&mesh, &request, predictor.as_deref(), Some(cancel), limits.max_faces)?;
+                let (result, stats) = jobs::refine(&mesh, &job, predictor.as_deref(), Some(cancel), limits.max_faces)?;
                 let encoded = convert::encode_mesh(&result.mesh, format, &write)?;
                 Ok(proto::RefineResponse {
                     mesh: encoded.is_none().then(|| mesh_to_proto(&result.mesh)),
