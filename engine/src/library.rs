@@ -97,12 +97,7 @@ impl OtherPrimitive {
             if count.checked_mul(width) != Some(indices.bytes.len()) {
                 return Err(format!("{} bytes of indices for {count}", indices.bytes.len()));
             }
-            if let Some(bad) = indices
-                .bytes
-                .chunks_exact(width)
-                .map(|b| b.iter().rev().fold(0usize, |x, &byte| (x << 8) | usize::from(byte)))
-                .find(|&i| i >= positions)
-            {
+            if let Some(bad) = indices.bytes.chunks_exact(width).map(unsigned_le).find(|&i| i >= positions) {
                 return Err(format!("index {bad} is out of range ({positions} positions)"));
             }
         }
@@ -186,4 +181,9 @@ impl MaterialLibrary {
             .and_then(|n| n.as_str())
             .map_or_else(|| format!("material{index}"), str::to_string)
     }
+}
+
+/// An unsigned integer stored little-endian in `bytes` (at most 8 of them), as glTF stores indices.
+pub(crate) fn unsigned_le(bytes: &[u8]) -> usize {
+    bytes.iter().rev().fold(0usize, |x, &byte| (x << 8) | usize::from(byte))
 }

@@ -339,26 +339,18 @@ pub struct SimplifyArgs {
 }
 
 impl SimplifyArgs {
-    /// The job these flags ask for, its options as the contract has them.
+    /// The job these flags ask for, in the engine's terms.
     pub fn job(&self) -> SimplifyJob {
         use meshlod_engine::simplify::{
             AttributeWeights, BoundaryMode, Metric, NormalUpdate, Placement, SimplifyOptions,
         };
         let defaults = SimplifyOptions::default();
-        let target_ratio = removed_fraction(self.ratio, self.keep);
         let w = match self.w {
             WArg::Value(w) => WChoice::Given(w),
             WArg::Auto => WChoice::Auto,
             WArg::Search => WChoice::Search,
         };
         let options = SimplifyOptions {
-            target_faces: self.faces.map(|n| n as usize),
-            // Neither target: the engine's default share.
-            target_ratio: if self.faces.is_none() && target_ratio.is_none() {
-                defaults.target_ratio
-            } else {
-                target_ratio
-            },
             max_error: self.max_error,
             metric: match self.metric {
                 // (w is 0 here while the predictor or the search chooses it.)
@@ -393,7 +385,8 @@ impl SimplifyArgs {
             prune: self.prune,
             halves: !self.whole,
             ..defaults
-        };
+        }
+        .with_targets(self.faces.map(|n| n as usize), removed_fraction(self.ratio, self.keep));
         let options =
             SimplifyRequest { options, w, compute_hausdorff: self.hausdorff, progressive_lossless: self.pm_lossless };
         SimplifyJob {

@@ -396,14 +396,7 @@ impl TryFrom<&proto::SimplifyOptions> for SimplifyOptions {
             Err(_) => return Err(invalid("options.boundary", format!("unknown value {}", o.boundary))),
         };
         let defaults = SimplifyOptions::default();
-        Ok(SimplifyOptions {
-            target_faces: o.target_faces.map(|n| n as usize),
-            // Neither target: the engine's default ratio.
-            target_ratio: if o.target_faces.is_none() && o.target_ratio.is_none() {
-                defaults.target_ratio
-            } else {
-                o.target_ratio
-            },
+        let options = SimplifyOptions {
             max_error: o.max_error,
             metric,
             placement,
@@ -419,8 +412,9 @@ impl TryFrom<&proto::SimplifyOptions> for SimplifyOptions {
             }),
             prune: o.prune,
             halves: !o.whole,
-            cancel: None,
-        })
+            ..defaults
+        };
+        Ok(options.with_targets(o.target_faces.map(|n| n as usize), o.target_ratio))
     }
 }
 

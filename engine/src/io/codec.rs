@@ -5,7 +5,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use super::files::folder_of;
+use super::files::{folder_of, io_error};
 use super::format::MeshFormat;
 use super::options::{ReadLimits, Target, WriteOptions};
 use crate::error::MeshError;
@@ -79,11 +79,6 @@ pub(crate) fn codec(format: MeshFormat) -> &'static Codec {
     CODECS.iter().find(|c| c.format == format).expect("every format has a row")
 }
 
-/// An I/O error on `path`.
-fn io_error(path: &Path, err: std::io::Error) -> MeshError {
-    super::files::io_error(path, err)
-}
-
 /// Reads bytes in `format`; `folder` as [`Codec::read`].
 pub(crate) fn read(
     format: MeshFormat,
@@ -103,6 +98,14 @@ pub(crate) fn write(out: &mut dyn Write, mesh: &Mesh, format: MeshFormat, target
             std::io::ErrorKind::Unsupported,
             format!("{format:?} is read only: write .obj, .ply, .gltf or .glb"),
         )),
+    }
+}
+
+impl MeshFormat {
+    /// Whether meshlod can write this format (STL and OFF are read only): whether its row has a
+    /// writer.
+    pub fn writable(self) -> bool {
+        codec(self).write.is_some()
     }
 }
 
@@ -138,12 +141,11 @@ pub fn unwritten_warning(format: MeshFormat, mesh: &Mesh) -> Option<String> {
 /// known extension, and a folder that exists.
 pub fn output_format(path: impl AsRef<Path>) -> Result<MeshFormat, MeshError> {
     let path = path.as_ref();
-    let format = MeshFormat::from_extension(path).filter(|f| codec(*f).write.is_some()).ok_or_else(|| {
-        MeshError::UnsupportedFormat {
+    let format =
+        MeshFormat::from_extension(path).filter(|f| f.writable()).ok_or_else(|| MeshError::UnsupportedFormat {
             path: PathBuf::from(path),
             reason: "output extension must be .obj, .ply, .gltf or .glb (STL and OFF are read only)".into(),
-        }
-    })?;
+        })?;
     if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty())
         && !parent.is_dir()
     {

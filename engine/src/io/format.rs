@@ -32,11 +32,6 @@ impl MeshFormat {
         }
     }
 
-    /// Whether meshlod can write this format (STL and OFF are read only).
-    pub fn writable(self) -> bool {
-        matches!(self, MeshFormat::Obj | MeshFormat::Ply | MeshFormat::Gltf)
-    }
-
     /// Format recognised from a file's bytes: PLY and OFF have a magic word, binary STL a size
     /// that matches its facet count, ascii STL begins with `solid`, OBJ is text.
     pub fn sniff(bytes: &[u8]) -> Option<MeshFormat> {

@@ -393,6 +393,14 @@ impl SimplifyOptions {
         }
     }
 
+    /// The options with the targets a request gives: neither gives the default share
+    /// (the one `SimplifyOptions::default()` has); with both, whichever is met first.
+    pub fn with_targets(self, target_faces: Option<usize>, target_ratio: Option<f64>) -> SimplifyOptions {
+        let target_ratio =
+            if target_faces.is_none() && target_ratio.is_none() { Some(DEFAULT_TARGET_RATIO) } else { target_ratio };
+        SimplifyOptions { target_faces, target_ratio, ..self }
+    }
+
     /// [`SimplifyOptions::face_target`] for `mesh` as [`super::simplify`] will count its faces (those
     /// that repeat a vertex are dropped first): what a caller that predicts or reports the target
     /// before the run should ask.

@@ -41,7 +41,7 @@ impl State<'_> {
             && self.terms.wedges.is_none()
             && !(may_move && self.config.options.placement != Placement::Endpoint)
         {
-            return self.endpoints_only(va, vb, may_keep_a, may_keep_b);
+            return self.endpoints_only(va, vb, (pa, pb), may_keep_a, may_keep_b);
         }
         let mut best: Option<Choice> = None;
         // Keeps the choice with the lower (cost, error); the first one considered wins a tie.
@@ -128,8 +128,14 @@ impl State<'_> {
     /// coordinates, whose `auto` placement is `endpoint`): the choice of [`State::choose`]'s
     /// general path, the same operations in the same order, without its closures.
     #[inline]
-    fn endpoints_only(&self, va: &VertexData, vb: &VertexData, may_keep_a: bool, may_keep_b: bool) -> Option<Choice> {
-        let (pa, pb) = (to_f64(va.position), to_f64(vb.position));
+    fn endpoints_only(
+        &self,
+        va: &VertexData,
+        vb: &VertexData,
+        (pa, pb): (DVec3, DVec3),
+        may_keep_a: bool,
+        may_keep_b: bool,
+    ) -> Option<Choice> {
         let q = va.quadric + vb.quadric;
         let factor = self.normal_factor(va, vb);
         let (e_a, e_b) = (q.error(pa), q.error(pb));

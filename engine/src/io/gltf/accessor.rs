@@ -88,8 +88,3 @@ pub(crate) fn bounds<const N: usize>(values: &[[f32; N]]) -> ([f32; N], [f32; N]
     }
     (min, max)
 }
-
-/// An unsigned integer stored little-endian in `bytes` (at most 8 of them).
-pub(crate) fn unsigned_le(bytes: &[u8]) -> usize {
-    bytes.iter().rev().fold(0usize, |x, &byte| (x << 8) | usize::from(byte))
-}

@@ -3,7 +3,7 @@
 //! accessor index out of range, indices stored as floats, weights as ints), and a panic inside
 //! them is no way to refuse a file. Each check names the element it refuses.
 
-use super::accessor::unsigned_le;
+use crate::library::unsigned_le;
 
 /// Every accessor and material a mesh primitive names exists: `Err((element, reason))` naming
 /// the first that does not.

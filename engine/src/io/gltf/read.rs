@@ -549,9 +549,7 @@ fn read_primitive(
         return Err(format!("index {bad} is out of range ({n} vertices)"));
     }
     let mut triangles = triangles_of(primitive.mode(), &indices)?;
-    let same_count = |what: &str, got: usize| -> Result<(), String> {
-        if got == n { Ok(()) } else { Err(format!("{what} has {got} values for {n} positions")) }
-    };
+    let same_count = |what: &str, got: usize| same_count(what, got, n);
     let normals = quantized::<3>(primitive, &gltf::Semantic::Normals, buffers)?
         .or_else(|| reader.read_normals().map(|r| r.collect()));
     let tangents = quantized::<4>(primitive, &gltf::Semantic::Tangents, buffers)?
@@ -656,9 +654,7 @@ fn skin_of(
     n: usize,
     joint_count: usize,
 ) -> Result<(Option<Vec<[u16; 4]>>, Option<Vec<[f32; 4]>>, usize), String> {
-    let same_count = |what: &str, got: usize| -> Result<(), String> {
-        if got == n { Ok(()) } else { Err(format!("{what} has {got} values for {n} positions")) }
-    };
+    let same_count = |what: &str, got: usize| same_count(what, got, n);
     let mut mended = 0;
     if let (Some(j), Some(w)) = (&mut joints, &mut weights) {
         finite("WEIGHTS_0", w)?;
@@ -684,6 +680,11 @@ fn skin_of(
         (joints, weights) = (None, None);
     }
     Ok((joints, weights, mended))
+}
+
+/// `Err` unless attribute `what` has one value (`got`) for each of the `n` positions.
+fn same_count(what: &str, got: usize, n: usize) -> Result<(), String> {
+    if got == n { Ok(()) } else { Err(format!("{what} has {got} values for {n} positions")) }
 }
 
 /// Joins the parts into one mesh. Texture coordinates and colours are kept when some part has
