@@ -549,7 +549,6 @@ fn read_primitive(
         return Err(format!("index {bad} is out of range ({n} vertices)"));
     }
     let mut triangles = triangles_of(primitive.mode(), &indices)?;
-    let same_count = |what: &str, got: usize| same_count(what, got, n);
     let normals = quantized::<3>(primitive, &gltf::Semantic::Normals, buffers)?
         .or_else(|| reader.read_normals().map(|r| r.collect()));
     let tangents = quantized::<4>(primitive, &gltf::Semantic::Tangents, buffers)?
@@ -559,26 +558,11 @@ fn read_primitive(
     let uvs1 = quantized::<2>(primitive, &gltf::Semantic::TexCoords(1), buffers)?
         .or_else(|| reader.read_tex_coords(1).map(|r| r.into_f32().collect()));
     let colors: Option<Vec<[f32; 4]>> = reader.read_colors(0).map(|r| r.into_rgba_f32().collect());
-    if let Some(v) = &normals {
-        same_count("NORMAL", v.len())?;
-        finite("NORMAL", v)?;
-    }
-    if let Some(v) = &uvs {
-        same_count("TEXCOORD_0", v.len())?;
-        finite("TEXCOORD_0", v)?;
-    }
-    if let Some(v) = &uvs1 {
-        same_count("TEXCOORD_1", v.len())?;
-        finite("TEXCOORD_1", v)?;
-    }
-    if let Some(v) = &tangents {
-        same_count("TANGENT", v.len())?;
-        finite("TANGENT", v)?;
-    }
-    if let Some(v) = &colors {
-        same_count("COLOR_0", v.len())?;
-        finite("COLOR_0", v)?;
-    }
+    per_vertex("NORMAL", normals.as_deref(), n)?;
+    per_vertex("TEXCOORD_0", uvs.as_deref(), n)?;
+    per_vertex("TEXCOORD_1", uvs1.as_deref(), n)?;
+    per_vertex("TANGENT", tangents.as_deref(), n)?;
+    per_vertex("COLOR_0", colors.as_deref(), n)?;
     let (joints, weights, mended) = if joint_count > 0 {
         let joints = reader.read_joints(0).map(|r| r.into_u16().collect());
         skin_of(joints, reader.read_weights(0).map(|r| r.into_f32().collect()), n, joint_count)?
@@ -654,7 +638,6 @@ fn skin_of(
     n: usize,
     joint_count: usize,
 ) -> Result<(Option<Vec<[u16; 4]>>, Option<Vec<[f32; 4]>>, usize), String> {
-    let same_count = |what: &str, got: usize| same_count(what, got, n);
     let mut mended = 0;
     if let (Some(j), Some(w)) = (&mut joints, &mut weights) {
         finite("WEIGHTS_0", w)?;
@@ -669,8 +652,8 @@ fn skin_of(
                 }
             }
         }
-        same_count("JOINTS_0", j.len())?;
-        same_count("WEIGHTS_0", w.len())?;
+        same_count("JOINTS_0", j.len(), n)?;
+        same_count("WEIGHTS_0", w.len(), n)?;
         if let Some((vertex, bad)) =
             j.iter().enumerate().find_map(|(i, j)| j.iter().find(|&&x| x as usize >= joint_count).map(|&x| (i, x)))
         {
@@ -685,6 +668,14 @@ fn skin_of(
 /// `Err` unless attribute `what` has one value (`got`) for each of the `n` positions.
 fn same_count(what: &str, got: usize, n: usize) -> Result<(), String> {
     if got == n { Ok(()) } else { Err(format!("{what} has {got} values for {n} positions")) }
+}
+
+/// `Err` unless attribute `what`, where the primitive has it, has one finite value for each of the
+/// `n` positions.
+fn per_vertex<const N: usize>(what: &str, values: Option<&[[f32; N]]>, n: usize) -> Result<(), String> {
+    let Some(values) = values else { return Ok(()) };
+    same_count(what, values.len(), n)?;
+    finite(what, values)
 }
 
 /// Joins the parts into one mesh. Texture coordinates and colours are kept when some part has
