@@ -70,11 +70,13 @@ fn local_and_client_runs_of_a_gltf_with_a_warning_print_the_same_report_and_writ
     ok(&["generate", "torus", "-o", s(&obj), "--resolution", "24"]);
     let plain = dir.join("plain.gltf");
     ok(&["convert", s(&obj), "-o", s(&plain)]);
-    // An application-specific attribute: read, passed over, and said in the warnings.
+    // A morph target: read, passed over, and said in the warnings. An application-specific
+    // attribute beside it: carried into the result.
     let mut doc: Value = serde_json::from_slice(&std::fs::read(&plain).unwrap()).unwrap();
     let position = doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"].clone();
     for primitive in doc["meshes"][0]["primitives"].as_array_mut().unwrap() {
         primitive["attributes"]["_SENSOR"] = position.clone();
+        primitive["targets"] = serde_json::json!([{ "POSITION": position.clone() }]);
     }
     let input = dir.join("warned.gltf");
     std::fs::write(&input, serde_json::to_vec(&doc).unwrap()).unwrap();
@@ -95,7 +97,7 @@ fn local_and_client_runs_of_a_gltf_with_a_warning_print_the_same_report_and_writ
     let (local_json, local_warnings, local_bytes) = run(false, true);
     let (remote_json, remote_warnings, remote_bytes) = run(true, true);
     assert!(
-        local_warnings.iter().any(|w| w.contains("_SENSOR")),
+        local_warnings.iter().any(|w| w.contains("morph targets")),
         "the local run says what it passed over: {local_warnings:?}"
     );
     assert_eq!(local_warnings, remote_warnings, "the same warnings on stderr");
@@ -107,6 +109,9 @@ fn local_and_client_runs_of_a_gltf_with_a_warning_print_the_same_report_and_writ
     assert_eq!(local, remote, "the same report, but for the engine's time");
     assert!((local["kept_fraction"].as_f64().unwrap() - 0.25).abs() < 0.01, "{local}");
     assert_eq!(local_bytes, remote_bytes, "the same GLB bytes");
+    let json_length = u32::from_le_bytes(local_bytes[12..16].try_into().unwrap()) as usize;
+    let written = String::from_utf8_lossy(&local_bytes[20..20 + json_length]).to_string();
+    assert!(written.contains("\"_SENSOR\"") && !written.contains("targets"), "{written}");
     // The text reports agree too, but for the time and the output's name (`…; 0.012 s → out.glb`).
     let scrub = |text: &str| -> String {
         let without_time = |l: &str| match l.split_once(" s → ") {

@@ -26,9 +26,9 @@ fn textured_sphere() -> Mesh {
             colors.push(if upper { [1.0, 0.5, 0.0, 1.0] } else { [0.0, 0.5, 1.0, 1.0] });
         }
     }
-    sphere.corners.uvs = Some(uvs);
-    sphere.corners.normals = Some(normals);
-    sphere.corners.colors = Some(colors);
+    sphere.corners.set_uvs(Some(uvs));
+    sphere.corners.set_normals(Some(normals));
+    sphere.corners.set_colors(Some(colors));
     sphere
 }
 
@@ -88,8 +88,8 @@ async fn streamed_splits_carry_their_corner_values() {
     for level in [0, streamed.levels() / 2, streamed.levels()] {
         let (a, b) = (streamed.at_level(level), unary.at_level(level));
         assert_eq!((&a.positions, &a.triangles), (&b.positions, &b.triangles), "level {level}");
-        assert_eq!(a.corners.normals, b.corners.normals, "level {level}");
-        assert_eq!(a.corners.colors, b.corners.colors, "level {level}");
+        assert_eq!(a.corners.normals(), b.corners.normals(), "level {level}");
+        assert_eq!(a.corners.colors(), b.corners.colors(), "level {level}");
         assert_eq!(a.corners.uvs_with_origin(false), b.corners.uvs_with_origin(false), "level {level}");
     }
     // Fully refined, every corner has the input's values.
@@ -98,7 +98,7 @@ async fn streamed_splits_carry_their_corner_values() {
     let key = |m: &Mesh, k: usize| {
         let mut key: Vec<u32> = m.positions[m.triangles[k / 3][k % 3] as usize].map(f32::to_bits).to_vec();
         key.extend(m.corners.uvs_with_origin(false).unwrap()[k].map(f32::to_bits));
-        key.extend(m.corners.normals.as_ref().unwrap()[k].map(f32::to_bits));
+        key.extend(m.corners.normals().unwrap()[k].map(f32::to_bits));
         key
     };
     let mut got: Vec<Vec<u32>> = (0..3 * full.face_count()).map(|k| key(&full, k)).collect();
@@ -124,9 +124,8 @@ async fn a_streamed_glb_keeps_its_material_and_joint_numbers() {
     let mut client = server.client().await;
     // The sphere's halves drawn with two materials, sent as a GLB.
     let mut mesh = textured_sphere();
-    let upper: Vec<bool> =
-        (0..3 * mesh.face_count()).map(|k| mesh.corners.colors.as_ref().unwrap()[k][0] > 0.5).collect();
-    mesh.corners.materials = Some(upper.iter().map(|&u| u as u32).collect());
+    let upper: Vec<bool> = (0..3 * mesh.face_count()).map(|k| mesh.corners.colors().unwrap()[k][0] > 0.5).collect();
+    mesh.corners.set_materials(Some(upper.iter().map(|&u| u as u32).collect()));
     let materials = vec![serde_json::json!({ "name": "lower" }), serde_json::json!({ "name": "upper" })];
     mesh.corners.library = Some(std::sync::Arc::new(MaterialLibrary { materials, ..Default::default() }));
     let mut glb = Vec::new();
@@ -145,7 +144,7 @@ async fn a_streamed_glb_keeps_its_material_and_joint_numbers() {
         assert!(m.corners.names().contains(&"material"), "level {level}");
     }
     let full = pm.at_level(pm.levels());
-    let count = |m: &Mesh, which: u32| m.corners.materials.as_ref().unwrap().iter().filter(|&&x| x == which).count();
+    let count = |m: &Mesh, which: u32| m.corners.materials().unwrap().iter().filter(|&&x| x == which).count();
     assert_eq!((count(&full, 0), count(&full, 1)), (count(&mesh, 0), count(&mesh, 1)));
 
     // A skinned GLB (the fuzz corpus' strip): its joints and weights come through the stream.
@@ -163,7 +162,7 @@ async fn a_streamed_glb_keeps_its_material_and_joint_numbers() {
     full.check().unwrap();
     // Each corner's joints and weights (as bits), sorted: the same skins, in any order.
     let skins = |m: &Mesh| {
-        let (joints, weights) = (m.corners.joints.clone().unwrap(), m.corners.weights.clone().unwrap());
+        let (joints, weights) = (m.corners.joints().unwrap().clone(), m.corners.weights().unwrap().clone());
         let mut all: Vec<_> = joints.into_iter().zip(weights).map(|(j, w)| (j, w.map(f32::to_bits))).collect();
         all.sort();
         all

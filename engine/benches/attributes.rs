@@ -53,15 +53,15 @@ fn peer_input(mesh: &Mesh) -> PeerInput {
     let bytes = positions.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
     let (mut attributes, mut weights) = (Vec::new(), Vec::new());
     let c = &mesh.corners;
-    if c.uvs.is_some() {
+    if c.uvs().is_some() {
         weights.extend([1.0, 1.0]);
     }
-    if c.normals.is_some() {
+    if c.normals().is_some() {
         weights.extend([0.5; 3]);
     }
     for &k in &wedges.source {
-        attributes.extend(c.uvs.iter().flat_map(|u| u[k]));
-        attributes.extend(c.normals.iter().flat_map(|n| n[k]));
+        attributes.extend(c.uvs().into_iter().flat_map(|u| u[k]));
+        attributes.extend(c.normals().into_iter().flat_map(|n| n[k]));
     }
     if weights.is_empty() {
         attributes = vec![0.0; count];
@@ -126,7 +126,7 @@ fn main() {
         let mut theirs = Mesh::new(input.positions.clone(), triangles).expect("meshopt's output is a mesh");
         // Its corners' values: the split vertices' attribute stream (uv first, then normal).
         let stride = input.weights.len();
-        let has_uv = mesh.corners.uvs.is_some();
+        let has_uv = mesh.corners.uvs().is_some();
         let uv_at = |i: u32| [input.attributes[i as usize * stride], input.attributes[i as usize * stride + 1]];
         let normal_offset = if has_uv { 2 } else { 0 };
         let normal_at = |i: u32| {
@@ -134,10 +134,10 @@ fn main() {
             [input.attributes[k], input.attributes[k + 1], input.attributes[k + 2]]
         };
         if has_uv {
-            theirs.corners.uvs = Some(indices.iter().map(|&i| uv_at(i)).collect());
+            theirs.corners.set_uvs(Some(indices.iter().map(|&i| uv_at(i)).collect()));
         }
-        if mesh.corners.normals.is_some() {
-            theirs.corners.normals = Some(indices.iter().map(|&i| normal_at(i)).collect());
+        if mesh.corners.normals().is_some() {
+            theirs.corners.set_normals(Some(indices.iter().map(|&i| normal_at(i)).collect()));
         }
         let look = |m: &Mesh| appearance_error(&mesh, m, 20_000, 1024.0, 1).expect("measures");
         let (a_ours, a_theirs) = (look(&ours.mesh), look(&theirs));

@@ -75,12 +75,12 @@ pub(crate) fn barycentric(p: DVec3, [a, b, c]: [DVec3; 3]) -> Option<[f64; 3]> {
 }
 
 fn uv_at(mesh: &Mesh, f: usize, b: [f64; 3]) -> Option<DVec2> {
-    let uvs = mesh.corners.uvs.as_ref()?;
+    let uvs = mesh.corners.uvs()?;
     Some((0..3).map(|k| DVec2::new(uvs[3 * f + k][0] as f64, uvs[3 * f + k][1] as f64) * b[k]).sum())
 }
 
 fn normal_at(mesh: &Mesh, f: usize, b: [f64; 3]) -> Option<DVec3> {
-    let normals = mesh.corners.normals.as_ref()?;
+    let normals = mesh.corners.normals()?;
     Some((0..3).map(|k| DVec3::from(normals[3 * f + k].map(f64::from)) * b[k]).sum::<DVec3>().normalize_or_zero())
 }
 
@@ -107,8 +107,8 @@ pub fn appearance_error(
         running += a;
         cumulative.push(running);
     }
-    let with_uv = input.corners.uvs.is_some() && lod.corners.uvs.is_some();
-    let with_normal = input.corners.normals.is_some() && lod.corners.normals.is_some();
+    let with_uv = input.corners.uvs().is_some() && lod.corners.uvs().is_some();
+    let with_normal = input.corners.normals().is_some() && lod.corners.normals().is_some();
     let charts = if with_uv { Charts::new(input) } else { None };
     let mut rng = SplitMix64::new(seed);
     let (mut uv_errors, mut uv_any_errors, mut normal_errors) = (Vec::new(), Vec::new(), Vec::new());
@@ -186,7 +186,7 @@ pub fn appearance_error(
 
 /// Twice the signed area of face `f`'s texture-space triangle (0 without texture coordinates).
 fn uv_area(mesh: &Mesh, f: usize) -> f64 {
-    let Some(uvs) = mesh.corners.uvs.as_ref() else { return 0.0 };
+    let Some(uvs) = mesh.corners.uvs() else { return 0.0 };
     let [a, b, c] = [0, 1, 2].map(|k| DVec2::new(uvs[3 * f + k][0] as f64, uvs[3 * f + k][1] as f64));
     (b - a).perp_dot(c - a)
 }
@@ -202,7 +202,7 @@ struct Charts {
 
 impl Charts {
     fn new(input: &Mesh) -> Option<Charts> {
-        let uvs = input.corners.uvs.as_ref()?;
+        let uvs = input.corners.uvs()?;
         let bits = |k: usize| uvs[k].map(f32::to_bits);
         // Faces joined across every edge whose two corners agree on both sides.
         let n = input.face_count();
@@ -282,7 +282,7 @@ impl Charts {
     /// The charts LOD face `f`'s three corner values all come from; `None` when they have none in
     /// common (or a value is not the input's).
     fn of_face(&self, lod: &Mesh, f: usize) -> Option<Vec<u32>> {
-        let uvs = lod.corners.uvs.as_ref()?;
+        let uvs = lod.corners.uvs()?;
         let mut common: Vec<u32> = self.by_value.get(&uvs[3 * f].map(f32::to_bits))?.clone();
         for k in 1..3 {
             let these = self.by_value.get(&uvs[3 * f + k].map(f32::to_bits))?;
@@ -338,8 +338,8 @@ mod tests {
             let p = mesh.positions[v as usize];
             [p[0] * uv_scale, p[1] * uv_scale]
         };
-        mesh.corners.uvs = Some(mesh.triangles.iter().flatten().map(|&v| uv(v)).collect());
-        mesh.corners.normals = Some(vec![[0.0, 0.0, 1.0]; 6]);
+        mesh.corners.set_uvs(Some(mesh.triangles.iter().flatten().map(|&v| uv(v)).collect()));
+        mesh.corners.set_normals(Some(vec![[0.0, 0.0, 1.0]; 6]));
         mesh
     }
 
@@ -364,10 +364,10 @@ mod tests {
         assert_eq!(same.uv_turned_over, Some(0));
         // The second face's last two corners swap their values: the same values, the other way round.
         let mut b = a.clone();
-        b.corners.uvs.as_mut().unwrap().swap(4, 5);
+        b.corners.uvs_mut().unwrap().swap(4, 5);
         assert_eq!(appearance_error(&a, &b, 100, 1024.0, 1).unwrap().uv_turned_over, Some(1));
         // Without texture coordinates nothing is counted.
-        b.corners.uvs = None;
+        b.corners.set_uvs(None);
         assert_eq!(appearance_error(&a, &b, 100, 1024.0, 1).unwrap().uv_turned_over, None);
     }
 
@@ -376,7 +376,7 @@ mod tests {
         // Two triangles meeting on the diagonal, each with its own chart far apart: samples on
         // the diagonal have two input values, and the nearer one counts.
         let mut a = square(1.0);
-        let uvs = a.corners.uvs.as_mut().unwrap();
+        let uvs = a.corners.uvs_mut().unwrap();
         uvs[3..6].iter_mut().for_each(|uv| uv[0] += 5.0);
         let error = appearance_error(&a, &a, 2000, 1024.0, 7).unwrap().uv_texels.unwrap();
         assert!(error.max_sampled < 1e-6, "{error:?}");
@@ -389,14 +389,14 @@ mod tests {
         let top = square(1.0);
         let mut lining = square(1.0);
         lining.positions.iter_mut().for_each(|p| p[2] = -0.001);
-        lining.corners.uvs.as_mut().unwrap().iter_mut().for_each(|uv| uv[1] += 3.0);
+        lining.corners.uvs_mut().unwrap().iter_mut().for_each(|uv| uv[1] += 3.0);
         let mut input = top.clone();
         input.positions.extend(&lining.positions);
         input.triangles.extend(lining.triangles.iter().map(|t| t.map(|v| v + 4)));
-        let uvs = input.corners.uvs.as_mut().unwrap();
-        uvs.extend(lining.corners.uvs.as_ref().unwrap());
-        let normals = input.corners.normals.as_mut().unwrap();
-        normals.extend(lining.corners.normals.as_ref().unwrap());
+        let uvs = input.corners.uvs_mut().unwrap();
+        uvs.extend(lining.corners.uvs().unwrap());
+        let normals = input.corners.normals_mut().unwrap();
+        normals.extend(lining.corners.normals().unwrap());
         let mut lod = top.clone();
         lod.positions.iter_mut().for_each(|p| p[2] = -0.0009);
         let measured = appearance_error(&input, &lod, 1000, 1024.0, 3).unwrap();
@@ -404,7 +404,7 @@ mod tests {
         assert!(error.max_sampled < 1e-3, "{error:?}");
         assert!(measured.uv_texels_any_chart.unwrap().mean > 1000.0, "{measured:?}");
         // A value the input never had has no chart: the nearest point decides, as before.
-        lod.corners.uvs.as_mut().unwrap().iter_mut().for_each(|uv| uv[0] += 0.25);
+        lod.corners.uvs_mut().unwrap().iter_mut().for_each(|uv| uv[0] += 0.25);
         let error = appearance_error(&input, &lod, 1000, 1024.0, 3).unwrap().uv_texels.unwrap();
         assert!(error.mean > 1000.0, "compared with the lining: {error:?}");
     }

@@ -6,12 +6,14 @@
 //! [`mesh::DistanceUnits`].
 
 pub mod appearance;
+pub mod attributes;
 pub mod bvh;
 pub mod datasets;
 pub mod error;
 mod fan;
 pub mod features;
 pub mod hausdorff;
+mod ids;
 pub mod io;
 pub mod library;
 pub mod mesh;

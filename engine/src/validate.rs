@@ -48,7 +48,7 @@ pub struct MeshReport {
     /// Euler characteristic V − E + F over referenced vertices.
     pub euler_characteristic: i64,
     /// Per-corner attributes the mesh carries ("normal", "uv", "color"), besides positions.
-    pub attributes: Vec<&'static str>,
+    pub attributes: Vec<String>,
     /// Two-face edges whose faces carry different attributes at one of its ends (texture seams,
     /// hard normals, colour borders).
     pub seam_edges: usize,
@@ -149,7 +149,7 @@ pub fn validate(mesh: &Mesh) -> MeshReport {
             && non_manifold_vertices == 0
             && inconsistently_oriented_edges == 0,
         euler_characteristic: referenced_count - topology.edges.len() as i64 + tris.len() as i64,
-        attributes: mesh.corners.names(),
+        attributes: mesh.corners.names().into_iter().map(String::from).collect(),
         seam_edges,
         point_and_line_primitives: mesh.corners.library.as_ref().map_or(0, |l| l.other_primitives.len()),
     }

@@ -56,16 +56,16 @@ fn attributes_survive_every_writer_and_are_counted() {
 
     // Colours: PLY bytes in, the same bytes out.
     let mut coloured = cube.clone();
-    coloured.corners.normals = None;
-    coloured.corners.colors =
-        Some((0..36).map(|k| [(k % 7) as f32 / 255.0, 1.0, (3 * k % 256) as f32 / 255.0, 1.0]).collect());
+    coloured.corners.set_normals(None);
+    coloured
+        .corners
+        .set_colors(Some((0..36).map(|k| [(k % 7) as f32 / 255.0, 1.0, (3 * k % 256) as f32 / 255.0, 1.0]).collect()));
     let mut bytes = Vec::new();
     write_mesh_to(&mut bytes, &coloured, MeshFormat::Ply).unwrap();
     let back = ply(&bytes).unwrap();
     assert_eq!(back.corners.names(), ["uv", "color"]);
-    let channels = |m: &Mesh| {
-        m.corners.colors.as_ref().unwrap().iter().map(|c| c.map(|x| (x * 255.0).round() as u8)).collect::<Vec<_>>()
-    };
+    let channels =
+        |m: &Mesh| m.corners.colors().unwrap().iter().map(|c| c.map(|x| (x * 255.0).round() as u8)).collect::<Vec<_>>();
     assert_eq!(channels(&back), channels(&coloured));
 
     // Without attributes nothing changes: the same vertices, no attribute properties.
@@ -79,14 +79,14 @@ fn attributes_survive_every_writer_and_are_counted() {
 #[test]
 fn bad_attributes_are_refused_by_name() {
     let mut cube = textured_cube();
-    cube.corners.uvs.as_mut().unwrap()[7][1] = f32::NAN;
+    cube.corners.uvs_mut().unwrap()[7][1] = f32::NAN;
     let err = cube.check().unwrap_err();
     assert!(
         matches!(&err, MeshError::InvalidParameter { name: "uv", reason } if reason.contains("corner 7 (face 2)")),
         "{err}"
     );
     let mut cube = textured_cube();
-    cube.corners.normals.as_mut().unwrap().pop();
+    cube.corners.normals_mut().unwrap().pop();
     let err = cube.check().unwrap_err();
     assert!(
         matches!(&err, MeshError::InvalidParameter { name: "normal", reason } if reason.contains("35 per-corner values for 36")),
@@ -150,7 +150,7 @@ fn textured_assets_read_with_their_attributes_as_one_surface() {
         assert_eq!((&back.positions, &back.triangles), (&mesh.positions, &mesh.triangles), "{}", row["file"]);
         // OBJ's v points up, glTF's down: a glTF's values come back as 1 − v.
         let uvs = mesh.corners.uvs_with_origin(false).map(|u| u.into_owned());
-        assert_eq!((&back.corners.uvs, &back.corners.normals), (&uvs, &mesh.corners.normals));
+        assert_eq!((back.corners.uvs(), back.corners.normals()), (uvs.as_ref(), mesh.corners.normals()));
     }
 }
 
@@ -164,12 +164,13 @@ fn gltf_round_trips_values_materials_and_images() {
     use meshlod_engine::mesh::{Image, ImageSource, MaterialLibrary};
     use serde_json::json;
     let mut cube = textured_cube();
-    cube.corners.colors = Some((0..36).map(|k| [(k / 6) as f32 / 8.0, 0.5, 1.0, 1.0]).collect());
+    cube.corners.set_colors(Some((0..36).map(|k| [(k / 6) as f32 / 8.0, 0.5, 1.0, 1.0]).collect()));
     // A light map's coordinates and a tangent frame per face (mirrored on every other face).
-    let uvs = cube.corners.uvs.clone().unwrap();
-    cube.corners.uvs1 = Some((0..36).map(|k| [0.5 * uvs[k][0] + (k / 6) as f32 / 8.0, 0.5 * uvs[k][1]]).collect());
-    cube.corners.tangents = Some((0..36).map(|k| [0.0, 1.0, 0.0, if (k / 6) % 2 == 0 { 1.0 } else { -1.0 }]).collect());
-    cube.corners.materials = Some((0..12u32).flat_map(|f| [f / 6; 3]).collect());
+    let uvs = cube.corners.uvs().unwrap().clone();
+    cube.corners.set_uvs1(Some((0..36).map(|k| [0.5 * uvs[k][0] + (k / 6) as f32 / 8.0, 0.5 * uvs[k][1]]).collect()));
+    cube.corners
+        .set_tangents(Some((0..36).map(|k| [0.0, 1.0, 0.0, if (k / 6) % 2 == 0 { 1.0 } else { -1.0 }]).collect()));
+    cube.corners.set_materials(Some((0..12u32).flat_map(|f| [f / 6; 3]).collect()));
     let png = b"\x89PNG\r\n\x1a\n and the rest".to_vec();
     let library = MaterialLibrary {
         materials: vec![
@@ -194,13 +195,13 @@ fn gltf_round_trips_values_materials_and_images() {
         assert_eq!((back.vertex_count(), back.face_count()), (8, 12), "seam vertices joined back");
         assert_eq!(corner_positions(&back), corner_positions(&cube));
         assert_eq!(back.corners.names(), ["normal", "uv", "uv1", "tangent", "color", "material"]);
-        assert_eq!(back.corners.uvs1.as_deref(), cube.corners.uvs1_with_origin(true).as_deref());
-        assert_eq!(back.corners.tangents, cube.corners.tangents);
+        assert_eq!(back.corners.uvs1().map(Vec::as_slice), cube.corners.uvs1_with_origin(true).as_deref());
+        assert_eq!(back.corners.tangents(), cube.corners.tangents());
         // glTF's v points down: the values written are 1 − v, and read back as they were written.
         assert!(back.corners.uv_origin_top);
-        assert_eq!(back.corners.uvs.as_deref(), cube.corners.uvs_with_origin(true).as_deref());
-        assert_eq!((&back.corners.normals, &back.corners.colors), (&cube.corners.normals, &cube.corners.colors));
-        assert_eq!(back.corners.materials, cube.corners.materials);
+        assert_eq!(back.corners.uvs().map(Vec::as_slice), cube.corners.uvs_with_origin(true).as_deref());
+        assert_eq!((back.corners.normals(), back.corners.colors()), (cube.corners.normals(), cube.corners.colors()));
+        assert_eq!(back.corners.materials(), cube.corners.materials());
         let read = back.corners.library.as_deref().unwrap();
         assert_eq!((&read.materials, &read.textures), (&library.materials, &library.textures));
         assert_eq!(read.images[0].source, ImageSource::Bytes(png.clone()), "the image travels inside the file");
@@ -217,7 +218,7 @@ fn gltf_round_trips_values_materials_and_images() {
     assert_eq!(back.corners.names(), ["material"], "one primitive of the default material");
     // A material index the library does not have is refused by name.
     let mut bad = cube.clone();
-    bad.corners.materials.as_mut().unwrap()[33..36].copy_from_slice(&[2, 2, 2]);
+    bad.corners.materials_mut().unwrap()[33..36].copy_from_slice(&[2, 2, 2]);
     let err = bad.check().unwrap_err().to_string();
     assert!(err.contains("face 11 names material 2"), "{err}");
 }
@@ -246,12 +247,12 @@ fn textured_assets_come_out_as_gltf_with_their_attributes_and_textures() {
         }
         assert_eq!(back.corners.names(), names, "{name}: every attribute kept");
         assert_eq!(corner_positions(&back), corner_positions(&lod), "{name}");
-        assert_eq!(back.corners.uvs.as_deref(), lod.corners.uvs_with_origin(true).as_deref(), "{name}");
+        assert_eq!(back.corners.uvs().map(Vec::as_slice), lod.corners.uvs_with_origin(true).as_deref(), "{name}");
         // As OBJ: each material the result uses named in an MTL file beside it, with the input's
         // base-colour texture beside that (the same bytes) wherever the input could read it.
         let obj_out = out.with_extension("obj");
         write_mesh(&obj_out, &lod).unwrap();
-        if let (Some(input), Some(_)) = (mesh.corners.library.as_deref(), &mesh.corners.materials) {
+        if let (Some(input), Some(_)) = (mesh.corners.library.as_deref(), mesh.corners.materials()) {
             let from_obj = read_mesh(&obj_out).unwrap();
             let read = from_obj.corners.library.as_deref().expect("the OBJ's materials read back");
             assert!(!read.materials.is_empty(), "{name}");
@@ -317,7 +318,7 @@ fn uv_turn(uv: &[[f32; 2]], f: usize) -> f32 {
 /// The edges inside a texture chart (the same values on both sides) whose two faces' texture-space
 /// triangles turn opposite ways: where the map folds over itself.
 fn folded_edges(m: &Mesh) -> usize {
-    let Some(uv) = &m.corners.uvs else { return 0 };
+    let Some(uv) = m.corners.uvs() else { return 0 };
     let area = |f: usize| uv_turn(uv, f);
     let mut first = std::collections::HashMap::new();
     let mut folds = 0;
@@ -387,7 +388,7 @@ fn simplification_keeps_the_textured_assets_attributes_and_seams() {
         }
         // Faces whose texture-space triangle turns counter-clockwise and clockwise.
         let flips = |m: &Mesh| -> (usize, usize) {
-            let Some(uv) = &m.corners.uvs else { return (0, 0) };
+            let Some(uv) = m.corners.uvs() else { return (0, 0) };
             let signed = |f: usize| uv_turn(uv, f);
             let positive = (0..m.face_count()).filter(|&f| signed(f) > 0.0).count();
             let negative = (0..m.face_count()).filter(|&f| signed(f) < 0.0).count();
@@ -440,13 +441,13 @@ fn anchors_left_on_a_hard_edge_move_again_so_a_skinned_asset_reaches_its_target(
 fn corner_key(mesh: &Mesh, k: usize) -> Vec<u32> {
     let c = &mesh.corners;
     let mut key = Vec::new();
-    key.extend(c.uvs.iter().flat_map(|u| u[k].map(f32::to_bits)));
-    key.extend(c.normals.iter().flat_map(|n| n[k].map(f32::to_bits)));
-    key.extend(c.tangents.iter().flat_map(|t| t[k].map(f32::to_bits)));
-    key.extend(c.uvs1.iter().flat_map(|u| u[k].map(f32::to_bits)));
-    key.extend(c.colors.iter().flat_map(|x| x[k].map(f32::to_bits)));
-    key.extend(c.joints.iter().flat_map(|x| x[k].map(u32::from)));
-    key.extend(c.weights.iter().flat_map(|x| x[k].map(f32::to_bits)));
+    key.extend(c.uvs().into_iter().flat_map(|u| u[k].map(f32::to_bits)));
+    key.extend(c.normals().into_iter().flat_map(|n| n[k].map(f32::to_bits)));
+    key.extend(c.tangents().into_iter().flat_map(|t| t[k].map(f32::to_bits)));
+    key.extend(c.uvs1().into_iter().flat_map(|u| u[k].map(f32::to_bits)));
+    key.extend(c.colors().into_iter().flat_map(|x| x[k].map(f32::to_bits)));
+    key.extend(c.joints().into_iter().flat_map(|x| x[k].map(u32::from)));
+    key.extend(c.weights().into_iter().flat_map(|x| x[k].map(f32::to_bits)));
     key
 }
 
@@ -463,7 +464,7 @@ fn locked_seams_keep_every_vertex_they_had() {
             [p[0] + if upper(&sphere, k / 3) { 2.0 } else { 0.0 }, p[1]]
         })
         .collect();
-    sphere.corners.uvs = Some(uvs);
+    sphere.corners.set_uvs(Some(uvs));
     let seam_positions = |m: &Mesh| -> std::collections::HashSet<[u32; 3]> {
         let mut sides: std::collections::HashMap<u32, [bool; 2]> = std::collections::HashMap::new();
         for f in 0..m.face_count() {
@@ -494,7 +495,7 @@ fn locked_seams_keep_every_vertex_they_had() {
 fn corner_at(m: &Mesh, k: usize) -> Vec<u32> {
     let mut key: Vec<u32> = m.positions[m.triangles[k / 3][k % 3] as usize].map(f32::to_bits).to_vec();
     key.extend(corner_key(m, k));
-    key.extend(m.corners.materials.iter().map(|x| x[k]));
+    key.extend(m.corners.materials().into_iter().map(|x| x[k]));
     key
 }
 
@@ -527,7 +528,7 @@ fn progressive_meshes_carry_attributes_exactly() {
             [p[0] + if upper { 2.0 } else { 0.0 }, p[1]]
         })
         .collect();
-    sphere.corners.uvs = Some(uvs);
+    sphere.corners.set_uvs(Some(uvs));
     // A second set without the seam (a light map), and tangents along it.
     let uvs1 = sphere
         .triangles
@@ -538,8 +539,8 @@ fn progressive_meshes_carry_attributes_exactly() {
             [p[2], p[0]]
         })
         .collect();
-    sphere.corners.uvs1 = Some(uvs1);
-    sphere.corners.tangents = Some(vec![[1.0, 0.0, 0.0, -1.0]; 3 * sphere.face_count()]);
+    sphere.corners.set_uvs1(Some(uvs1));
+    sphere.corners.set_tangents(Some(vec![[1.0, 0.0, 0.0, -1.0]; 3 * sphere.face_count()]));
     meshes.push(("seamed sphere".into(), sphere));
     if let Some(dir) = meshlod_engine::datasets::require_shared_textured("pm_attributes") {
         for row in textured_manifest(&dir) {

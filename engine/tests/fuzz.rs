@@ -45,7 +45,7 @@ fn corpus() -> Vec<(PathBuf, Vec<u8>)> {
             [p[0] + if upper { 2.0 } else { 0.0 }, p[1]]
         })
         .collect();
-    sphere.corners.uvs = Some(uvs);
+    sphere.corners.set_uvs(Some(uvs));
     let options = meshlod_engine::simplify::SimplifyOptions {
         target_ratio: Some(0.5),
         record_progressive: true,
@@ -390,10 +390,10 @@ fn arbitrary_corner_attributes(mesh: &mut Mesh, rng: &mut SplitMix64) {
     let picks: Vec<([f32; 2], [f32; 3])> =
         mesh.triangles.iter().flatten().map(|&v| palette[v as usize][(rng.next_u64() % sets) as usize]).collect();
     if uvs {
-        mesh.corners.uvs = Some(picks.iter().map(|p| p.0).collect());
+        mesh.corners.set_uvs(Some(picks.iter().map(|p| p.0).collect()));
     }
     if normals {
-        mesh.corners.normals = Some(picks.iter().map(|p| p.1).collect());
+        mesh.corners.set_normals(Some(picks.iter().map(|p| p.1).collect()));
     }
 }
 

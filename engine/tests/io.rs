@@ -18,8 +18,8 @@ fn obj_reads_polygons_negative_indices_and_corner_attributes() {
     let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\nf -3/1/1 -2/2/1 -1/3/1\n";
     let m = obj(text).unwrap();
     assert_eq!(m.triangles, vec![[0, 1, 2]]);
-    assert_eq!(m.corners.uvs.as_ref().unwrap()[2], [1.0, 1.0]);
-    assert_eq!(m.corners.normals.as_ref().unwrap().len(), 3);
+    assert_eq!(m.corners.uvs().unwrap()[2], [1.0, 1.0]);
+    assert_eq!(m.corners.normals().unwrap().len(), 3);
     // Unreferenced vertices keep their place: the file's numbering is the mesh's numbering.
     let m = obj("v 9 9 9\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 2 3 4\n").unwrap();
     assert_eq!(m.vertex_count(), 4);
@@ -265,7 +265,7 @@ fn shared_meshes_load_with_known_counts() {
     }
     // spot has texture coordinates: kept per corner, geometry still welded.
     let spot = read_mesh(dir.join("spot.obj")).unwrap();
-    assert_eq!(spot.corners.uvs.as_ref().map(Vec::len), Some(3 * spot.face_count()));
+    assert_eq!(spot.corners.uvs().map(Vec::len), Some(3 * spot.face_count()));
 }
 
 #[test]
@@ -464,8 +464,8 @@ fn quantized_gltf_is_read_as_floats() {
         "{:?}",
         mesh.positions
     );
-    assert!(mesh.corners.normals.as_ref().unwrap().iter().all(|&n| close(n, [0.0, 0.0, 1.0])));
-    let uvs = mesh.corners.uvs.as_ref().unwrap();
+    assert!(mesh.corners.normals().unwrap().iter().all(|&n| close(n, [0.0, 0.0, 1.0])));
+    let uvs = mesh.corners.uvs().unwrap();
     assert_eq!((uvs[1], uvs[2][1]), ([1.0, 0.0], 32768.0 / 65535.0));
     // Written out, it needs no extension: the values are floats.
     let mut glb = Vec::new();
@@ -510,7 +510,7 @@ fn gltf_attribute_faults_name_the_primitive() {
     };
     // Without indices, each three vertices are a triangle, with their own texture coordinates.
     let mesh = read(3, &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).unwrap();
-    assert_eq!((mesh.face_count(), mesh.corners.uvs.as_ref().unwrap()[1]), (1, [1.0, 0.0]));
+    assert_eq!((mesh.face_count(), mesh.corners.uvs().unwrap()[1]), (1, [1.0, 0.0]));
     let e = read(3, &[[0.0, 0.0], [1.0, 0.0]]).unwrap_err().to_string();
     assert!(e.contains("mesh 0 primitive 0") && e.contains("TEXCOORD_0 has 2 values for 3 positions"), "{e}");
     let e = read(3, &[[0.0, 0.0], [f32::NAN, 0.0], [0.0, 1.0]]).unwrap_err().to_string();
@@ -531,7 +531,7 @@ fn obj_files_come_with_their_materials_and_textures() {
     let jpeg = b"\xFF\xD8\xFF a file elsewhere".to_vec();
     std::fs::write(elsewhere.join("wood grain.jpg"), &jpeg).unwrap();
     let mut sphere = procedural::icosphere(1);
-    sphere.corners.materials = Some((0..sphere.face_count() as u32).flat_map(|f| [f % 3; 3]).collect());
+    sphere.corners.set_materials(Some((0..sphere.face_count() as u32).flat_map(|f| [f % 3; 3]).collect()));
     let library = MaterialLibrary {
         materials: vec![
             json!({ "name": "painted", "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }),
@@ -551,7 +551,7 @@ fn obj_files_come_with_their_materials_and_textures() {
     assert!(mtl.contains("map_Kd paint.png") && mtl.contains("map_Kd wood_grain.jpg"), "{mtl}");
     assert!(mtl.contains("Kd 0.5 0.25 1\nd 0.5"), "{mtl}");
     let back = read_mesh(dir.join("sphere.obj")).unwrap();
-    assert_eq!(back.corners.materials, sphere.corners.materials);
+    assert_eq!(back.corners.materials(), sphere.corners.materials());
     let read = back.corners.library.as_deref().unwrap();
     let names: Vec<String> = (0..3).map(|m| read.material_name(m)).collect();
     // (A name is one line in both files: the one that tried to add a vertex stays a name.)
@@ -592,10 +592,10 @@ fn obj_values_on_some_faces_only() {
     let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n\
         f 1/1/1 2/2/1 3/3/1\nf 1//1 3//1 4//1\nf 1 4 5\n";
     let mesh = obj(text).unwrap();
-    let uvs = mesh.corners.uvs.as_ref().expect("kept");
+    let uvs = mesh.corners.uvs().expect("kept");
     assert_eq!(uvs[..3], [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]);
     assert!(uvs[3..].iter().all(|&uv| uv == [0.0, 0.0]));
-    assert!(mesh.corners.normals.is_none());
+    assert!(mesh.corners.normals().is_none());
     let warning = mesh.corners.not_carried_warning().expect("said");
     assert!(warning.contains("normals (given at 6 of 9 face corners)") && !warning.contains("texture"), "{warning}");
     // A texture coordinate out of range is refused where some faces have none too.
@@ -603,7 +603,7 @@ fn obj_values_on_some_faces_only() {
     assert!(e.contains("line 5") && e.contains("texture coordinate 2 but the file has 1"), "{e}");
     // Given everywhere, nothing is said.
     let whole = obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n").unwrap();
-    assert!(whole.corners.normals.is_some() && whole.corners.not_carried_warning().is_none());
+    assert!(whole.corners.normals().is_some() && whole.corners.not_carried_warning().is_none());
 }
 
 /// A glTF mesh whose primitives differ in their attributes: texture coordinates and colours are
@@ -642,11 +642,11 @@ fn gltf_primitives_with_different_attributes() {
     );
     let mesh = read_gltf(&json, "mixed.gltf").unwrap();
     assert_eq!(mesh.face_count(), 2);
-    let uvs = mesh.corners.uvs.as_ref().expect("texture coordinates kept");
+    let uvs = mesh.corners.uvs().expect("texture coordinates kept");
     assert_eq!((uvs[1], &uvs[3..]), ([0.75, 0.5], &[[0.0, 0.0]; 3][..]));
-    let colors = mesh.corners.colors.as_ref().expect("colours kept");
+    let colors = mesh.corners.colors().expect("colours kept");
     assert_eq!((colors[0], &colors[3..]), ([0.5, 0.5, 0.5, 1.0], &[[1.0; 4]; 3][..]));
-    assert!(mesh.corners.normals.is_none());
+    assert!(mesh.corners.normals().is_none());
     let warning = mesh.corners.not_carried_warning().expect("said");
     assert!(warning.contains("normals (a primitive has no NORMAL)"), "{warning}");
 }
@@ -734,7 +734,8 @@ fn gltf_point_and_line_primitives_are_carried_as_they_were() {
 
 /// Two things glTF allows that the `gltf` crate's validation refuses: an application-specific
 /// attribute (`_BATCHID`, as 3D Tiles writes) and a primitive without POSITION (it draws
-/// nothing). The file is read, what is not carried said, and the result written as GLB reads back.
+/// nothing). The file is read, the attribute carried as a channel, what is not carried said, and
+/// the result written as GLB reads back with the channel.
 #[test]
 fn gltf_custom_attributes_and_primitives_without_positions_are_read_and_said() {
     let mut bin = Vec::new();
@@ -754,11 +755,15 @@ fn gltf_custom_attributes_and_primitives_without_positions_are_read_and_said() {
     let mesh = read_gltf(&json, "tiles.gltf").unwrap();
     assert_eq!((mesh.face_count(), mesh.vertex_count()), (1, 3));
     let warning = mesh.corners.not_carried_warning().expect("said");
-    assert!(warning.contains("_BATCHID values") && warning.contains("primitives without POSITION"), "{warning}");
+    assert!(!warning.contains("_BATCHID") && warning.contains("primitives without POSITION"), "{warning}");
+    let batch = meshlod_engine::mesh::Semantic::Custom("_BATCHID".into());
+    let ids = meshlod_engine::mesh::Values::F1(vec![[7.0]; 3]);
+    assert_eq!(mesh.corners.channel(&batch), Some(&ids));
     let mut glb = Vec::new();
     write_mesh_to(&mut glb, &mesh, MeshFormat::Gltf).unwrap();
     let back = read_mesh_bytes(&glb, Some(MeshFormat::Gltf), Path::new("back.glb"), &ReadLimits::default()).unwrap();
     assert_eq!((back.face_count(), back.positions), (1, mesh.positions));
+    assert_eq!(back.corners.channel(&batch), Some(&ids), "carried into the GLB");
     // A POSITION that is there is still checked: one without its bounds is refused by name.
     let e = read_gltf(&json.replace(r#","min":[0,0,0],"max":[1,1,0]"#, ""), "tiles.gltf").unwrap_err().to_string();
     assert!(e.contains("POSITION") && e.contains("min"), "{e}");

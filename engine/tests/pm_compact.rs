@@ -64,7 +64,7 @@ fn uv_sphere(rings: u32, segments: u32) -> Mesh {
         }
     }
     let mut mesh = Mesh::new(positions, triangles).unwrap();
-    mesh.corners.uvs = Some(uvs);
+    mesh.corners.set_uvs(Some(uvs));
     mesh
 }
 

@@ -78,7 +78,7 @@ fn a_skinned_mesh_keeps_its_joints_weights_skeleton_and_animation_through_glb() 
     let back = read_mesh_bytes(&glb, Some(MeshFormat::Gltf), Path::new("back.glb"), &ReadLimits::default()).unwrap();
     assert_eq!(back.positions, mesh.positions);
     assert_eq!(back.triangles, mesh.triangles);
-    assert_eq!((&back.corners.joints, &back.corners.weights), (&mesh.corners.joints, &mesh.corners.weights));
+    assert_eq!((back.corners.joints(), back.corners.weights()), (mesh.corners.joints(), mesh.corners.weights()));
     let back_rig = back.corners.library.as_ref().and_then(|l| l.rig.as_ref()).unwrap();
     assert_eq!(back_rig.skins, rig.skins);
     assert_eq!(back_rig.animations, rig.animations);
@@ -96,7 +96,7 @@ fn a_skinned_mesh_keeps_its_joints_weights_skeleton_and_animation_through_glb() 
     let mut obj = Vec::new();
     write_mesh_to(&mut obj, &mesh, MeshFormat::Obj).unwrap();
     let obj = read_mesh_bytes(&obj, Some(MeshFormat::Obj), Path::new("back.obj"), &ReadLimits::default()).unwrap();
-    assert!(obj.corners.joints.is_none());
+    assert!(obj.corners.joints().is_none());
 }
 
 #[test]
@@ -105,15 +105,21 @@ fn simplified_and_refined_skins_stay_consistent() {
     let mesh = read(&skinned_gltf(1)).unwrap();
     let lod = simplify(&mesh, &SimplifyOptions { target_faces: Some(2), ..Default::default() }).unwrap().mesh;
     lod.check().unwrap();
-    let (joints, weights) = (lod.corners.joints.as_ref().unwrap(), lod.corners.weights.as_ref().unwrap());
-    let input: Vec<([u16; 4], [f32; 4])> =
-        mesh.corners.joints.iter().flatten().copied().zip(mesh.corners.weights.iter().flatten().copied()).collect();
+    let (joints, weights) = (lod.corners.joints().unwrap(), lod.corners.weights().unwrap());
+    let input: Vec<([u16; 4], [f32; 4])> = mesh
+        .corners
+        .joints()
+        .into_iter()
+        .flatten()
+        .copied()
+        .zip(mesh.corners.weights().into_iter().flatten().copied())
+        .collect();
     for (j, w) in joints.iter().zip(weights) {
         assert!(input.contains(&(*j, *w)), "a corner's skin the input never had: {j:?} {w:?}");
     }
     let refined = meshlod_engine::refine::subdivide::subdivide_uniform(&mesh);
     refined.check().unwrap();
-    for w in refined.corners.weights.as_ref().unwrap() {
+    for w in refined.corners.weights().unwrap() {
         let sum = w.iter().fold(0f32, |s, &x| s + x) as f64;
         assert!((sum - 1.0).abs() <= 2e-7 * w.iter().filter(|&&x| x != 0.0).count() as f64, "{w:?}");
     }
@@ -130,7 +136,7 @@ fn weights_that_do_not_sum_to_one_are_mended_and_said() {
         (sum - 1.0).abs() <= 2e-7 * w.iter().filter(|&&x| x != 0.0).count() as f64 && w.iter().all(|&x| x >= 0.0)
     };
     let mesh = read(&skinned_gltf_with(1, [0.25, 0.25, 0.0, 0.0])).unwrap();
-    let weights = mesh.corners.weights.as_ref().unwrap();
+    let weights = mesh.corners.weights().unwrap();
     assert!(weights.iter().all(validator_sum_ok) && weights.contains(&[0.5, 0.5, 0.0, 0.0]), "{weights:?}");
     let said: Vec<String> = mesh.corners.input_warnings().collect();
     assert!(said.iter().any(|w| w.contains("WEIGHTS_0") && w.contains("at 1 vertices")), "{said:?}");

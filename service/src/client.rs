@@ -114,7 +114,7 @@ impl Remote {
 /// carry), as a GLB file with its materials, textures and images; then the result is asked for as
 /// GLB too (the second value), so that it comes back with them.
 fn input_of(mesh: &meshlod_engine::Mesh) -> Result<(proto::MeshInput, Option<proto::MeshFormat>)> {
-    if mesh.corners.materials.is_none() || mesh.corners.library.is_none() {
+    if mesh.corners.materials().is_none() || mesh.corners.library.is_none() {
         return Ok((proto::MeshInput { source: Some(proto::mesh_input::Source::Mesh(mesh_to_proto(mesh))) }, None));
     }
     let mut data = Vec::new();

@@ -203,12 +203,10 @@ pub fn mesh_from_proto(m: &proto::Mesh, field: &str, limits: &MeshLimits) -> Res
         let at = |v: u32| std::array::from_fn(|k| values[N * v as usize + k]);
         Ok(Some(triangles.iter().flatten().map(|&v| at(v)).collect()))
     }
-    let corners = meshlod_engine::mesh::CornerAttributes {
-        normals: per_corner(&m.normals, &format!("{field}.normals"), vertex_count, &triangles)?,
-        uvs: per_corner(&m.uvs, &format!("{field}.uvs"), vertex_count, &triangles)?,
-        colors: per_corner(&m.colors, &format!("{field}.colors"), vertex_count, &triangles)?,
-        ..Default::default()
-    };
+    let mut corners = meshlod_engine::mesh::CornerAttributes::default();
+    corners.set_normals(per_corner(&m.normals, &format!("{field}.normals"), vertex_count, &triangles)?);
+    corners.set_uvs(per_corner(&m.uvs, &format!("{field}.uvs"), vertex_count, &triangles)?);
+    corners.set_colors(per_corner(&m.colors, &format!("{field}.colors"), vertex_count, &triangles)?);
     let mut mesh = Mesh::new(positions, triangles).map_err(|e| invalid(field, e.to_string()))?;
     mesh.corners = corners;
     if !mesh.corners.is_empty() {
@@ -271,7 +269,7 @@ pub fn encode_mesh(
 /// (a seam) once per distinct value.
 pub fn mesh_to_proto(mesh: &Mesh) -> proto::Mesh {
     let c = &mesh.corners;
-    if c.uvs.is_none() && c.normals.is_none() && c.colors.is_none() {
+    if c.uvs().is_none() && c.normals().is_none() && c.colors().is_none() {
         return proto::Mesh {
             positions: mesh.positions.iter().flatten().copied().collect(),
             indices: mesh.triangles.iter().flatten().copied().collect(),
@@ -280,15 +278,15 @@ pub fn mesh_to_proto(mesh: &Mesh) -> proto::Mesh {
     }
     // The contract has no materials: vertices are split by their values only.
     let wedges = c.value_wedges(&mesh.triangles, mesh.vertex_count());
-    fn flat<const N: usize>(values: &Option<Vec<[f32; N]>>, source: &[usize]) -> Vec<f32> {
-        values.as_ref().map_or_else(Vec::new, |v| source.iter().flat_map(|&k| v[k]).collect())
+    fn flat<const N: usize>(values: Option<&[[f32; N]]>, source: &[usize]) -> Vec<f32> {
+        values.map_or_else(Vec::new, |v| source.iter().flat_map(|&k| v[k]).collect())
     }
     proto::Mesh {
         positions: (0..wedges.source.len()).flat_map(|i| mesh.positions[wedges.vertex(&mesh.triangles, i)]).collect(),
         indices: wedges.corner_vertex.clone(),
-        normals: flat(&c.normals, &wedges.source),
-        uvs: flat(&c.uvs_with_origin(false).map(|u| u.into_owned()), &wedges.source),
-        colors: flat(&c.colors, &wedges.source),
+        normals: flat(c.normals().map(Vec::as_slice), &wedges.source),
+        uvs: flat(c.uvs_with_origin(false).as_deref(), &wedges.source),
+        colors: flat(c.colors().map(Vec::as_slice), &wedges.source),
     }
 }
 
@@ -675,13 +673,13 @@ mod tests {
         // vertex again, so the surface stays closed (no border) and the values stay per corner.
         let mut mesh = meshlod_engine::procedural::sharp_box(2);
         let uvs = (0..mesh.face_count()).flat_map(|f| [[f as f32, 0.0], [f as f32, 1.0], [f as f32, 2.0]]).collect();
-        mesh.corners.uvs = Some(uvs);
+        mesh.corners.set_uvs(Some(uvs));
         let sent = mesh_to_proto(&mesh);
         assert_eq!(sent.positions.len() / 3, 3 * mesh.face_count(), "split once per corner");
         let back = mesh_from_proto(&sent, "input.mesh", &MeshLimits::default()).unwrap();
         assert_eq!(back.vertex_count(), mesh.vertex_count());
         assert_eq!(meshlod_engine::validate::validate(&back).boundary_edges, 0);
-        assert_eq!(back.corners.uvs, mesh.corners.uvs);
+        assert_eq!(back.corners.uvs(), mesh.corners.uvs());
         for (t, u) in back.triangles.iter().zip(&mesh.triangles) {
             assert_eq!(t.map(|v| back.positions[v as usize]), u.map(|v| mesh.positions[v as usize]));
         }

@@ -75,24 +75,21 @@ type Flipped<'a> = (Option<std::borrow::Cow<'a, [[f32; 2]]>>, Option<std::borrow
 /// The values `picked` (indices into `values`), as the contract has them (texture coordinates from
 /// `flipped`, with v up).
 fn values_to_proto(values: &CornerAttributes, flipped: &Flipped<'_>, picked: &[usize]) -> proto::AttributeValues {
-    fn flat<T: Copy, const N: usize>(values: &Option<Vec<[T; N]>>, picked: &[usize]) -> Vec<T> {
-        values.as_ref().map_or_else(Vec::new, |v| picked.iter().flat_map(|&k| v[k]).collect())
+    fn flat<T: Copy, const N: usize>(values: Option<&Vec<[T; N]>>, picked: &[usize]) -> Vec<T> {
+        values.map_or_else(Vec::new, |v| picked.iter().flat_map(|&k| v[k]).collect())
     }
     let flip = |v: &Option<std::borrow::Cow<'_, [[f32; 2]]>>| {
         v.as_ref().map_or_else(Vec::new, |v| picked.iter().flat_map(|&k| v[k]).collect())
     };
     proto::AttributeValues {
-        normals: flat(&values.normals, picked),
+        normals: flat(values.normals(), picked),
         uvs: flip(&flipped.0),
-        colors: flat(&values.colors, picked),
-        materials: values.materials.as_ref().map_or_else(Vec::new, |m| picked.iter().map(|&k| m[k]).collect()),
-        tangents: flat(&values.tangents, picked),
+        colors: flat(values.colors(), picked),
+        materials: values.materials().map_or_else(Vec::new, |m| picked.iter().map(|&k| m[k]).collect()),
+        tangents: flat(values.tangents(), picked),
         uvs1: flip(&flipped.1),
-        joints: values
-            .joints
-            .as_ref()
-            .map_or_else(Vec::new, |j| picked.iter().flat_map(|&k| j[k].map(u32::from)).collect()),
-        weights: flat(&values.weights, picked),
+        joints: values.joints().map_or_else(Vec::new, |j| picked.iter().flat_map(|&k| j[k].map(u32::from)).collect()),
+        weights: flat(values.weights(), picked),
     }
 }
 
@@ -111,17 +108,15 @@ pub fn values_from_stream(
     fn present<T, const N: usize>(v: &[f32]) -> Option<Vec<[T; N]>> {
         (!v.is_empty()).then(Vec::new)
     }
-    let mut values = CornerAttributes {
-        normals: present(&first.normals),
-        uvs: present(&first.uvs),
-        colors: present(&first.colors),
-        materials: (!first.materials.is_empty()).then(Vec::new),
-        tangents: present(&first.tangents),
-        uvs1: present(&first.uvs1),
-        joints: (!first.joints.is_empty()).then(Vec::new),
-        weights: present(&first.weights),
-        ..Default::default()
-    };
+    let mut values = CornerAttributes::default();
+    values.set_normals(present(&first.normals));
+    values.set_uvs(present(&first.uvs));
+    values.set_colors(present(&first.colors));
+    values.set_materials((!first.materials.is_empty()).then(Vec::new));
+    values.set_tangents(present(&first.tangents));
+    values.set_uvs1(present(&first.uvs1));
+    values.set_joints((!first.joints.is_empty()).then(Vec::new));
+    values.set_weights(present(&first.weights));
     let read = |values: &mut CornerAttributes, message: &proto::CornerValues, at: &str| -> Result<(), JobError> {
         let added = message.added.as_ref().unwrap_or(&empty);
         append(values, added).map_err(|reason| invalid(format!("{at}.added"), reason))
@@ -171,13 +166,14 @@ pub fn values_from_stream(
     // Material and joint numbers are the input's (the stream does not carry the materials or the
     // skeleton themselves): as many default materials, and a skin of as many bare joints, stand for
     // them, so that every level is a valid mesh.
-    let materials = values.materials.iter().flatten().filter(|&&m| m != NO_MATERIAL).map(|&m| m as usize + 1).max();
-    let joints = values.joints.iter().flatten().flatten().map(|&j| j as usize + 1).max();
+    let materials =
+        values.materials().into_iter().flatten().filter(|&&m| m != NO_MATERIAL).map(|&m| m as usize + 1).max();
+    let joints = values.joints().into_iter().flatten().flatten().map(|&j| j as usize + 1).max();
     if materials.unwrap_or(0) > MAX_MATERIALS {
         return Err(invalid("base_corners.added.materials", format!("more than {MAX_MATERIALS} materials")));
     }
-    if values.materials.is_some() || values.joints.is_some() {
-        let rig = values.joints.is_some().then(|| {
+    if values.materials().is_some() || values.joints().is_some() {
+        let rig = values.joints().is_some().then(|| {
             let count = joints.unwrap_or(1);
             let mut nodes = vec![serde_json::json!({}); count];
             nodes.push(serde_json::json!({ "skin": 0 }));
@@ -201,7 +197,7 @@ pub fn values_from_stream(
 /// Appends `added`'s values to `values`, checking that every array the table has holds the same
 /// number of values and no other array is sent.
 fn append(values: &mut CornerAttributes, added: &proto::AttributeValues) -> Result<(), String> {
-    fn take<const N: usize>(to: &mut Option<Vec<[f32; N]>>, from: &[f32], name: &str) -> Result<usize, String> {
+    fn take<const N: usize>(to: Option<&mut Vec<[f32; N]>>, from: &[f32], name: &str) -> Result<usize, String> {
         match to {
             None if from.is_empty() => Ok(usize::MAX),
             None => Err(format!("{name}: the base sent none")),
@@ -215,14 +211,14 @@ fn append(values: &mut CornerAttributes, added: &proto::AttributeValues) -> Resu
         }
     }
     let mut counts = vec![
-        take(&mut values.normals, &added.normals, "normals")?,
-        take(&mut values.uvs, &added.uvs, "uvs")?,
-        take(&mut values.colors, &added.colors, "colors")?,
-        take(&mut values.tangents, &added.tangents, "tangents")?,
-        take(&mut values.uvs1, &added.uvs1, "uvs1")?,
-        take(&mut values.weights, &added.weights, "weights")?,
+        take(values.normals_mut(), &added.normals, "normals")?,
+        take(values.uvs_mut(), &added.uvs, "uvs")?,
+        take(values.colors_mut(), &added.colors, "colors")?,
+        take(values.tangents_mut(), &added.tangents, "tangents")?,
+        take(values.uvs1_mut(), &added.uvs1, "uvs1")?,
+        take(values.weights_mut(), &added.weights, "weights")?,
     ];
-    counts.push(match &mut values.materials {
+    counts.push(match values.materials_mut() {
         None if added.materials.is_empty() => usize::MAX,
         None => return Err("materials: the base sent none".into()),
         Some(m) => {
@@ -230,7 +226,7 @@ fn append(values: &mut CornerAttributes, added: &proto::AttributeValues) -> Resu
             added.materials.len()
         }
     });
-    counts.push(match &mut values.joints {
+    counts.push(match values.joints_mut() {
         None if added.joints.is_empty() => usize::MAX,
         None => return Err("joints: the base sent none".into()),
         Some(j) => {

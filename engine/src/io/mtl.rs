@@ -431,7 +431,7 @@ mod tests {
         assert_eq!(referred, ["glow.png", "lod.mtl", "normal_map.png"].map(|f| out.join(f)));
         // A glTF result keeps the translation and leaves the MTL statements out.
         let mut mesh = crate::procedural::icosphere(0);
-        mesh.corners.materials = Some(vec![0; 3 * mesh.face_count()]);
+        mesh.corners.set_materials(Some(vec![0; 3 * mesh.face_count()]));
         mesh.corners.library = Some(std::sync::Arc::new(library));
         let mut text = Vec::new();
         super::super::gltf::write::write_gltf(&mut text, &mesh, false, Some(&out)).unwrap();

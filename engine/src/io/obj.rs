@@ -275,12 +275,13 @@ impl<'a> ObjReader<'a> {
         if self.uv_corners > 0 {
             lookup(&self.corner_uv, self.uvs.len(), "texture coordinate")?;
             let uvs = &self.uvs;
-            corners.uvs =
-                Some(self.corner_uv.iter().map(|&i| if i == NO_VALUE { [0.0; 2] } else { uvs[i as usize] }).collect());
+            corners.set_uvs(Some(
+                self.corner_uv.iter().map(|&i| if i == NO_VALUE { [0.0; 2] } else { uvs[i as usize] }).collect(),
+            ));
         }
         if self.all_have_normal && !self.triangles.is_empty() {
             lookup(&self.corner_normal, self.normals.len(), "normal")?;
-            corners.normals = Some(self.corner_normal.iter().map(|&i| self.normals[i as usize]).collect());
+            corners.set_normals(Some(self.corner_normal.iter().map(|&i| self.normals[i as usize]).collect()));
         }
         // Normals on some faces and not on others are left out (faces without them are drawn flat,
         // which per-corner values could hold but the simplifier could then not move), and said (the
@@ -295,7 +296,7 @@ impl<'a> ObjReader<'a> {
             let mut library = super::mtl::library(&self.material_names, &self.libraries, folder);
             library.not_carried = not_carried;
             if !self.material_names.is_empty() {
-                corners.materials = Some(self.triangle_materials.iter().flat_map(|&m| [m; 3]).collect());
+                corners.set_materials(Some(self.triangle_materials.iter().flat_map(|&m| [m; 3]).collect()));
             }
             corners.library = Some(std::sync::Arc::new(library));
         }
@@ -323,7 +324,7 @@ pub fn write_obj(out: &mut impl Write, mesh: &Mesh) -> std::io::Result<()> {
 /// The codec's writer: [`write_obj`], and when the target is a file and the mesh has materials,
 /// their MTL file beside it (`OUT.mtl`, named by `mtllib`) with their textures.
 pub(super) fn write_obj_to(mut out: &mut dyn Write, mesh: &Mesh, target: &Target) -> std::io::Result<()> {
-    if let (Some(path), Some(_), Some(library)) = (target.path, &mesh.corners.materials, &mesh.corners.library)
+    if let (Some(path), Some(_), Some(library)) = (target.path, &mesh.corners.materials(), &mesh.corners.library)
         && !library.materials.is_empty()
     {
         let mtl = path.with_extension("mtl");
@@ -345,8 +346,8 @@ pub(super) fn write_obj_with_library(out: &mut impl Write, mesh: &Mesh, mtllib: 
         writeln!(out, "v {} {} {}", p[0], p[1], p[2])?;
     }
     // Each distinct value once, numbered in order of first use.
-    fn table<const N: usize>(values: &Option<Vec<[f32; N]>>) -> Option<(Vec<[f32; N]>, Vec<u32>)> {
-        let values = values.as_ref()?;
+    fn table<const N: usize>(values: Option<&[[f32; N]]>) -> Option<(Vec<[f32; N]>, Vec<u32>)> {
+        let values = values?;
         let mut seen: HashMap<[u32; N], u32> = HashMap::new();
         let mut distinct = Vec::new();
         let index = values
@@ -360,8 +361,8 @@ pub(super) fn write_obj_with_library(out: &mut impl Write, mesh: &Mesh, mtllib: 
             .collect();
         Some((distinct, index))
     }
-    let uvs = table(&mesh.corners.uvs_with_origin(false).map(|u| u.into_owned()));
-    let normals = table(&mesh.corners.normals);
+    let uvs = table(mesh.corners.uvs_with_origin(false).as_deref());
+    let normals = table(mesh.corners.normals().map(Vec::as_slice));
     for uv in uvs.iter().flat_map(|(d, _)| d) {
         writeln!(out, "vt {} {}", uv[0], uv[1])?;
     }
@@ -370,7 +371,7 @@ pub(super) fn write_obj_with_library(out: &mut impl Write, mesh: &Mesh, mtllib: 
     }
     let mut material = NO_MATERIAL;
     for (f, t) in mesh.triangles.iter().enumerate() {
-        if let (Some(materials), Some(library)) = (&mesh.corners.materials, &mesh.corners.library)
+        if let (Some(materials), Some(library)) = (&mesh.corners.materials(), &mesh.corners.library)
             && materials[3 * f] != material
             && materials[3 * f] != NO_MATERIAL
         {

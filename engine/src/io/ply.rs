@@ -419,12 +419,10 @@ fn with_corner_values(
         (per_vertex.len() == vertex_count && vertex_count > 0)
             .then(|| triangles.iter().flatten().map(|&v| per_vertex[v as usize]).collect())
     }
-    let corners = CornerAttributes {
-        uvs: per_corner(uvs, vertex_count, &triangles),
-        normals: per_corner(normals, vertex_count, &triangles),
-        colors: per_corner(colors, vertex_count, &triangles),
-        ..Default::default()
-    };
+    let mut corners = CornerAttributes::default();
+    corners.set_uvs(per_corner(uvs, vertex_count, &triangles));
+    corners.set_normals(per_corner(normals, vertex_count, &triangles));
+    corners.set_colors(per_corner(colors, vertex_count, &triangles));
     let mut mesh = Mesh { positions, triangles, corners };
     if !mesh.corners.is_empty() {
         // One value per vertex means a seam is two vertices at one position: joined again, so a
@@ -550,7 +548,7 @@ pub fn write_ply(out: &mut impl Write, mesh: &Mesh) -> std::io::Result<()> {
     // PLY colours are bytes: values that make the same bytes make one vertex.
     let mut quantised = c.clone();
     let uvs = c.uvs_with_origin(false);
-    if let Some(colors) = &mut quantised.colors {
+    if let Some(colors) = quantised.colors_mut() {
         colors.iter_mut().for_each(|col| *col = col.map(|x| colour_byte(x) as f32));
     }
     // PLY has no materials: a vertex is split by its values only.
@@ -560,13 +558,13 @@ pub fn write_ply(out: &mut impl Write, mesh: &Mesh) -> std::io::Result<()> {
         "ply\nformat binary_little_endian 1.0\ncomment written by meshlod\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\n",
         source.len()
     );
-    if c.normals.is_some() {
+    if c.normals().is_some() {
         header += "property float nx\nproperty float ny\nproperty float nz\n";
     }
-    if c.uvs.is_some() {
+    if c.uvs().is_some() {
         header += "property float u\nproperty float v\n";
     }
-    if c.colors.is_some() {
+    if c.colors().is_some() {
         header += "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n";
     }
     header += &format!("element face {}\nproperty list uchar int vertex_indices\nend_header\n", mesh.face_count());
@@ -576,12 +574,12 @@ pub fn write_ply(out: &mut impl Write, mesh: &Mesh) -> std::io::Result<()> {
         let v = wedges.vertex(&mesh.triangles, i);
         let floats = mesh.positions[v]
             .into_iter()
-            .chain(c.normals.iter().flat_map(|n| n[k]))
+            .chain(c.normals().into_iter().flat_map(|n| n[k]))
             .chain(uvs.iter().flat_map(|u| u[k]));
         for f in floats {
             buf.extend_from_slice(&f.to_le_bytes());
         }
-        buf.extend(c.colors.iter().flat_map(|col| col[k].map(colour_byte)));
+        buf.extend(c.colors().into_iter().flat_map(|col| col[k].map(colour_byte)));
     }
     for t in corner_vertex.chunks_exact(3) {
         buf.push(3);

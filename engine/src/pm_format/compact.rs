@@ -11,10 +11,11 @@ use super::bits::{BitReader, BitWriter, OutOfBits, Rice, width_for};
 use super::grid::{Grid, MAX_BITS, Quantization, from_octahedral, octahedral};
 use super::header::{
     ATTRIBUTE_COLOR, ATTRIBUTE_MATERIAL, ATTRIBUTE_NORMAL, ATTRIBUTE_SKIN, ATTRIBUTE_TANGENT, ATTRIBUTE_UV,
-    ATTRIBUTE_UV_ORIGIN_TOP, ATTRIBUTE_UV1, Reader, put_varint,
+    ATTRIBUTE_UV_ORIGIN_TOP, ATTRIBUTE_UV1, Reader, attributes_of, extra_channels, file_order, masked_channels,
+    put_channel_table, put_varint, read_channel_table,
 };
 use crate::error::MeshError;
-use crate::mesh::{CornerAttributes, Mesh, NO_MATERIAL};
+use crate::mesh::{Channel, CornerAttributes, Mesh, NO_MATERIAL, Semantic, Values};
 use crate::pm::{
     Fans, Hole, NO_VERTEX, PmAttributes, ProgressiveMesh, SplitAttributes, StreamedSplit, VertexSplit, faces_added,
 };
@@ -302,6 +303,8 @@ const UNSET: u32 = crate::mesh::NONE;
 /// material (−1 for none), the four joints and the four weights (in 255ths summing to 255, as a
 /// GPU's normalised bytes hold them; a joint of weight 0 is written as 0), those present.
 struct Layout {
+    /// Words of the channels the mask does not name, written as they are.
+    raw_words: usize,
     normal: bool,
     uv: bool,
     color: bool,
@@ -312,8 +315,9 @@ struct Layout {
 }
 
 impl Layout {
-    fn of(mask: u8) -> Layout {
+    fn of(mask: u8, extra: &[Channel]) -> Layout {
         Layout {
+            raw_words: extra.iter().map(|c| c.values.words_per_value()).sum(),
             normal: mask & ATTRIBUTE_NORMAL != 0,
             uv: mask & ATTRIBUTE_UV != 0,
             color: mask & ATTRIBUTE_COLOR != 0,
@@ -325,7 +329,8 @@ impl Layout {
     }
 
     /// The code each integer of a value uses: 0 normal, 1 uv, 2 colour, 3 material, 4 joint,
-    /// 5 weight, 6 tangent direction, 7 tangent handedness.
+    /// 5 weight, 6 tangent direction, 7 tangent handedness, 8 a word of a channel the mask does
+    /// not name.
     fn kinds(&self) -> Vec<usize> {
         let mut k = Vec::new();
         k.extend(std::iter::repeat_n(0, 2 * self.normal as usize));
@@ -337,6 +342,7 @@ impl Layout {
         k.extend(std::iter::repeat_n(6, 2 * self.tangent as usize));
         k.extend(std::iter::repeat_n(7, self.tangent as usize));
         k.extend(std::iter::repeat_n(1, 2 * self.uv1 as usize));
+        k.extend(std::iter::repeat_n(8, self.raw_words));
         k
     }
 }
@@ -346,7 +352,7 @@ impl Layout {
 struct AttributeState {
     table: Vec<Vec<i64>>,
     corners: Vec<[u32; 3]>,
-    codes: [Rice; 8],
+    codes: [Rice; 9],
     kinds: Vec<usize>,
     list: Vec<u32>,
     /// Writer only: the table index of each value.
@@ -452,7 +458,11 @@ pub(super) fn encode_attributes(
     quantization: &Quantization,
 ) {
     out.push(mask);
-    let layout = Layout::of(mask);
+    let extra: Vec<Channel> = extra_channels(&a.values).cloned().collect();
+    if !extra.is_empty() {
+        put_channel_table(out, &a.values);
+    }
+    let layout = Layout::of(mask, &extra);
     if layout.normal || layout.tangent {
         out.push(quantization.normal_bits);
     }
@@ -474,37 +484,9 @@ pub(super) fn encode_attributes(
     if let Some(g) = &uvs1 {
         g.write(out, false);
     }
-    let v = &a.values;
-    let value_of = |id: u32| -> Vec<i64> {
-        let id = id as usize;
-        let mut q = Vec::with_capacity(9);
-        if let Some(n) = &v.normals {
-            q.extend(octahedral(n[id], quantization.normal_bits));
-        }
-        if let (Some(u), Some(g)) = (&v.uvs, &uvs) {
-            q.extend(g.quantize(&u[id]));
-        }
-        if let (Some(c), Some(g)) = (&v.colors, &colors) {
-            q.extend(g.quantize(&c[id]));
-        }
-        if let Some(m) = &v.materials {
-            q.push(if m[id] == NO_MATERIAL { -1 } else { m[id] as i64 });
-        }
-        if let (Some(j), Some(w)) = (&v.joints, &v.weights) {
-            let weights = weight_bytes(w[id]);
-            q.extend((0..4).map(|k| if weights[k] == 0 { 0 } else { i64::from(j[id][k]) }));
-            q.extend(weights);
-        }
-        if let Some(t) = &v.tangents {
-            let t = t[id];
-            q.extend(octahedral([t[0], t[1], t[2]], quantization.normal_bits));
-            q.push(i64::from(t[3] < 0.0));
-        }
-        if let (Some(u), Some(g)) = (&v.uvs1, &uvs1) {
-            q.extend(g.quantize(&u[id]));
-        }
-        q
-    };
+    let channels = file_order(&a.values);
+    let grids = (quantization.normal_bits, uvs.as_ref(), colors.as_ref(), uvs1.as_ref());
+    let value_of = |id: u32| grid_value(&a.values, &channels, id as usize, grids);
     let base = pm.base();
     let total_faces = pm.faces_at_level(pm.levels());
     let mut state = AttributeState::new(&layout, total_faces);
@@ -543,6 +525,44 @@ pub(super) fn encode_attributes(
     let bytes = w.finish();
     put_varint(out, bytes.len() as u64);
     out.extend_from_slice(&bytes);
+}
+
+/// Value `id` of `all` as the grid integers the stream codes: each channel's in file order
+/// (`channels`), on the grids `grids` gives (normal bits, texture coordinates, colours, second
+/// texture coordinates); a channel the mask does not name as its words.
+fn grid_value(
+    all: &CornerAttributes,
+    channels: &[&Channel],
+    id: usize,
+    (normal_bits, uvs, colors, uvs1): (u8, Option<&Grid<2>>, Option<&Grid<4>>, Option<&Grid<2>>),
+) -> Vec<i64> {
+    let mut q = Vec::with_capacity(9);
+    for c in channels {
+        match (&c.semantic, &c.values) {
+            (Semantic::Normal, Values::F3(n)) => q.extend(octahedral(n[id], normal_bits)),
+            (Semantic::TexCoord(0), Values::F2(u)) => q.extend(uvs.expect("a grid per set").quantize(&u[id])),
+            (Semantic::TexCoord(1), Values::F2(u)) => q.extend(uvs1.expect("a grid per set").quantize(&u[id])),
+            (Semantic::Color(0), Values::F4(v)) => q.extend(colors.expect("a grid for colours").quantize(&v[id])),
+            (Semantic::Material, Values::U32(m)) => q.push(if m[id] == NO_MATERIAL { -1 } else { m[id] as i64 }),
+            (Semantic::Joints(0), Values::U16x4(j)) => {
+                // A joint of weight 0 is written as 0.
+                let weights = weight_bytes(all.weights().expect("joints come with weights")[id]);
+                q.extend((0..4).map(|k| if weights[k] == 0 { 0 } else { i64::from(j[id][k]) }));
+            }
+            (Semantic::Weights(0), Values::F4(w)) => q.extend(weight_bytes(w[id])),
+            (Semantic::Tangent, Values::F4(t)) => {
+                let t = t[id];
+                q.extend(octahedral([t[0], t[1], t[2]], normal_bits));
+                q.push(i64::from(t[3] < 0.0));
+            }
+            (_, values) => {
+                let mut words = Vec::new();
+                values.words(id, &mut words);
+                q.extend(words.into_iter().map(i64::from));
+            }
+        }
+    }
+    q
 }
 
 /// Skin weights in 255ths that sum to 255, each within one 255th of its share (the largest
@@ -590,74 +610,106 @@ pub(super) type DecodedAttributes = (PmAttributes, u8, Option<Grid<2>>, Option<G
 
 /// The value table's entries (grid integers, in the order `layout` gives) as the values they
 /// stand for, each checked against its grid: normal bits, texture coordinate, colour and second
-/// texture coordinate grids in `grids`.
+/// texture coordinate grids in `grids`. `channels`: the channels, empty, in file order.
 fn table_values(
     table: &[Vec<i64>],
-    layout: &Layout,
+    mut channels: Vec<Channel>,
     uv_origin_top: bool,
     (normal_bits, uvs, colors, uvs1): (u8, Option<&Grid<2>>, Option<&Grid<4>>, Option<&Grid<2>>),
     path: &std::path::Path,
 ) -> Result<CornerAttributes, MeshError> {
-    let mut values = CornerAttributes {
-        normals: layout.normal.then(Vec::new),
-        uvs: layout.uv.then(Vec::new),
-        colors: layout.color.then(Vec::new),
-        uv_origin_top,
-        materials: layout.material.then(Vec::new),
-        joints: layout.skin.then(Vec::new),
-        weights: layout.skin.then(Vec::new),
-        tangents: layout.tangent.then(Vec::new),
-        uvs1: layout.uv1.then(Vec::new),
-        library: None,
-    };
     for (t, q) in table.iter().enumerate() {
         let bad = |what: &str| MeshError::parse(path, format!("attribute value {t}"), format!("{what} off its grid"));
         let mut rest = &q[..];
-        if let Some(n) = &mut values.normals {
-            n.push(from_octahedral(on_grid(&mut rest, 2, normal_bits).ok_or_else(|| bad("normal"))?, normal_bits));
-        }
-        if let (Some(u), Some(g)) = (&mut values.uvs, uvs) {
-            u.push(g.value(on_grid(&mut rest, 2, g.bits).ok_or_else(|| bad("texture coordinate"))?));
-        }
-        if let (Some(c), Some(g)) = (&mut values.colors, colors) {
-            c.push(g.value(on_grid(&mut rest, 4, g.bits).ok_or_else(|| bad("colour"))?));
-        }
-        if let Some(m) = &mut values.materials {
-            let material = match rest[0] {
-                -1 => NO_MATERIAL,
-                m if (0..NO_MATERIAL as i64).contains(&m) => m as u32,
-                m => return Err(MeshError::parse(path, format!("attribute value {t}"), format!("material {m}"))),
+        for c in &mut channels {
+            let pushed = match (&c.semantic, &mut c.values) {
+                (Semantic::Normal, Values::F3(n)) => {
+                    n.push(from_octahedral(
+                        on_grid(&mut rest, 2, normal_bits).ok_or_else(|| bad("normal"))?,
+                        normal_bits,
+                    ));
+                    true
+                }
+                (Semantic::TexCoord(set @ (0 | 1)), Values::F2(u)) => {
+                    let (grid, what) =
+                        if *set == 0 { (uvs, "texture coordinate") } else { (uvs1, "second texture coordinate") };
+                    let g = grid.expect("a grid per texture coordinate set");
+                    u.push(g.value(on_grid(&mut rest, 2, g.bits).ok_or_else(|| bad(what))?));
+                    true
+                }
+                (Semantic::Color(0), Values::F4(v)) => {
+                    let g = colors.expect("a grid for colours");
+                    v.push(g.value(on_grid(&mut rest, 4, g.bits).ok_or_else(|| bad("colour"))?));
+                    true
+                }
+                (Semantic::Material, Values::U32(m)) => {
+                    m.push(match rest[0] {
+                        -1 => NO_MATERIAL,
+                        m if (0..NO_MATERIAL as i64).contains(&m) => m as u32,
+                        m => {
+                            return Err(MeshError::parse(
+                                path,
+                                format!("attribute value {t}"),
+                                format!("material {m}"),
+                            ));
+                        }
+                    });
+                    rest = &rest[1..];
+                    true
+                }
+                (Semantic::Joints(0), Values::U16x4(j)) => {
+                    let read: Option<Vec<u16>> = rest[..4].iter().map(|&c| u16::try_from(c).ok()).collect();
+                    let Some(read) = read else { return Err(bad("joint")) };
+                    j.push([read[0], read[1], read[2], read[3]]);
+                    rest = &rest[4..];
+                    true
+                }
+                (Semantic::Weights(0), Values::F4(w)) => {
+                    let weights = on_grid(&mut &rest[..4], 4, 8).ok_or_else(|| bad("weight"))?;
+                    w.push(std::array::from_fn(|k| weights[k] as f32 / 255.0));
+                    rest = &rest[4..];
+                    true
+                }
+                (Semantic::Tangent, Values::F4(tangents)) => {
+                    let direction =
+                        from_octahedral(on_grid(&mut rest, 2, normal_bits).ok_or_else(|| bad("tangent"))?, normal_bits);
+                    let handedness = on_grid(&mut rest, 1, 1).ok_or_else(|| bad("tangent handedness"))?[0];
+                    let [x, y, z] = direction;
+                    tangents.push([x, y, z, if handedness == 1 { -1.0 } else { 1.0 }]);
+                    true
+                }
+                (_, values) => {
+                    // A channel the mask does not name: its words as they are.
+                    let n = values.words_per_value();
+                    let words: Option<Vec<u32>> = rest[..n].iter().map(|&w| u32::try_from(w).ok()).collect();
+                    rest = &rest[n..];
+                    words.is_some_and(|w| values.push_words(&w))
+                }
             };
-            m.push(material);
-            rest = &rest[1..];
-        }
-        if let (Some(j), Some(w)) = (&mut values.joints, &mut values.weights) {
-            let joints: Option<Vec<u16>> = rest[..4].iter().map(|&c| u16::try_from(c).ok()).collect();
-            let Some(joints) = joints else { return Err(bad("joint")) };
-            let weights = on_grid(&mut &rest[4..8], 4, 8).ok_or_else(|| bad("weight"))?;
-            j.push([joints[0], joints[1], joints[2], joints[3]]);
-            w.push(std::array::from_fn(|k| weights[k] as f32 / 255.0));
-            rest = &rest[8..];
-        }
-        if let Some(tangents) = &mut values.tangents {
-            let direction =
-                from_octahedral(on_grid(&mut rest, 2, normal_bits).ok_or_else(|| bad("tangent"))?, normal_bits);
-            let handedness = on_grid(&mut rest, 1, 1).ok_or_else(|| bad("tangent handedness"))?[0];
-            let [x, y, z] = direction;
-            tangents.push([x, y, z, if handedness == 1 { -1.0 } else { 1.0 }]);
-        }
-        if let (Some(u), Some(g)) = (&mut values.uvs1, uvs1) {
-            u.push(g.value(on_grid(&mut rest, 2, g.bits).ok_or_else(|| bad("second texture coordinate"))?));
+            if !pushed {
+                return Err(MeshError::parse(
+                    path,
+                    format!("attribute value {t}"),
+                    format!("a {} value that is not one", c.semantic.name()),
+                ));
+            }
         }
     }
-    Ok(values)
+    Ok(attributes_of(channels, uv_origin_top))
 }
 
 /// Reads what [`encode_attributes`] wrote, replaying the splits of `pm` (already read).
-pub(super) fn decode_attributes(r: &mut Reader, pm: &ProgressiveMesh) -> Result<DecodedAttributes, MeshError> {
+pub(super) fn decode_attributes(
+    r: &mut Reader,
+    pm: &ProgressiveMesh,
+    extra: bool,
+) -> Result<DecodedAttributes, MeshError> {
     let mask = r.take(1)?[0];
-    super::header::check_mask(r, mask)?;
-    let layout = Layout::of(mask);
+    super::header::check_mask(r, mask, extra)?;
+    let extra = if extra { read_channel_table(r)? } else { Vec::new() };
+    let layout = Layout::of(mask, &extra);
+    let mut channels = masked_channels(mask);
+    channels.extend(extra);
     let normal_bits = if layout.normal || layout.tangent {
         let bits = r.take(1)?[0];
         if bits == 0 || bits > MAX_BITS {
@@ -728,6 +780,6 @@ pub(super) fn decode_attributes(r: &mut Reader, pm: &ProgressiveMesh) -> Result<
         return Err(MeshError::parse(path, format!("byte {start}"), "unexpected bits after the last attribute"));
     }
     let grids = (normal_bits, uvs.as_ref(), colors.as_ref(), uvs1.as_ref());
-    let values = table_values(&state.table, &layout, mask & ATTRIBUTE_UV_ORIGIN_TOP != 0, grids, path)?;
+    let values = table_values(&state.table, channels, mask & ATTRIBUTE_UV_ORIGIN_TOP != 0, grids, path)?;
     Ok((PmAttributes { values, base: base_corners, splits }, normal_bits, uvs, colors, uvs1))
 }

@@ -149,11 +149,9 @@ impl Quantization {
         Quantization {
             positions: Grid::fit(positions, clamp(precision.position_bits), true),
             normal_bits: clamp(precision.normal_bits),
-            uvs: values.and_then(|v| v.uvs.as_ref()).map(|u| Grid::fit(u.iter(), clamp(precision.uv_bits), false)),
-            uvs1: values.and_then(|v| v.uvs1.as_ref()).map(|u| Grid::fit(u.iter(), clamp(precision.uv_bits), false)),
-            colors: values
-                .and_then(|v| v.colors.as_ref())
-                .map(|c| Grid::fit(c.iter(), clamp(precision.color_bits), false)),
+            uvs: values.and_then(|v| v.uvs()).map(|u| Grid::fit(u.iter(), clamp(precision.uv_bits), false)),
+            uvs1: values.and_then(|v| v.uvs1()).map(|u| Grid::fit(u.iter(), clamp(precision.uv_bits), false)),
+            colors: values.and_then(|v| v.colors()).map(|c| Grid::fit(c.iter(), clamp(precision.color_bits), false)),
         }
     }
 }

@@ -213,7 +213,7 @@ pub(super) fn read_library(r: &mut Reader, a: &mut PmAttributes) -> Result<(), M
         .and_then(|json| library_from_json(&json))
         .ok_or_else(|| r.error("the materials section is not valid"))?;
     let known = library.materials.len() as u32;
-    if let Some(&m) = a.values.materials.iter().flatten().find(|&&m| m != NO_MATERIAL && m >= known) {
+    if let Some(&m) = a.values.materials().into_iter().flatten().find(|&&m| m != NO_MATERIAL && m >= known) {
         return Err(r.error(format!("material {m} out of range ({known} materials)")));
     }
     a.values.library = Some(std::sync::Arc::new(library));

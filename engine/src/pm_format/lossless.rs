@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use super::bits::{unzigzag, zigzag};
 use super::header::*;
 use crate::error::MeshError;
-use crate::mesh::{CornerAttributes, Mesh};
+use crate::mesh::Mesh;
 use crate::pm::{Hole, NO_VERTEX, PmAttributes, ProgressiveMesh, SplitAttributes, StreamedSplit, faces_added};
 
 /// Encodes a progressive mesh with every position and value as the `f32` it is (version 1, or 2
@@ -57,19 +57,14 @@ pub fn encode_lossless(pm: &ProgressiveMesh) -> Vec<u8> {
 fn encode_attributes(out: &mut Vec<u8>, pm: &ProgressiveMesh, a: &PmAttributes) {
     let v = &a.values;
     let mask = attribute_mask(v);
-    // A value as the 4-byte words it is written as: floats, the material number, then the joints
-    // (one word each) and weights.
+    // A value as the 4-byte words it is written as: each channel's in file order (floats as
+    // their bits, a joint or a material number one word each).
+    let channels = file_order(v);
     let floats = |k: u32| -> Vec<u32> {
-        let k = k as usize;
         let mut f = Vec::with_capacity(18);
-        f.extend(v.normals.iter().flat_map(|n| n[k].map(f32::to_bits)));
-        f.extend(v.uvs.iter().flat_map(|u| u[k].map(f32::to_bits)));
-        f.extend(v.colors.iter().flat_map(|c| c[k].map(f32::to_bits)));
-        f.extend(v.materials.iter().map(|m| m[k]));
-        f.extend(v.joints.iter().flat_map(|j| j[k].map(u32::from)));
-        f.extend(v.weights.iter().flat_map(|w| w[k].map(f32::to_bits)));
-        f.extend(v.tangents.iter().flat_map(|t| t[k].map(f32::to_bits)));
-        f.extend(v.uvs1.iter().flat_map(|u| u[k].map(f32::to_bits)));
+        for c in &channels {
+            c.values.words(k as usize, &mut f);
+        }
         f
     };
     // Every index in the order it is written, renumbered to distinct values in order of first use.
@@ -91,6 +86,9 @@ fn encode_attributes(out: &mut Vec<u8>, pm: &ProgressiveMesh, a: &PmAttributes) 
         })
         .collect();
     out.push(mask);
+    if extra_channels(v).next().is_some() {
+        put_channel_table(out, v);
+    }
     put_varint(out, values.len() as u64);
     for value in &values {
         for word in value {
@@ -114,65 +112,47 @@ fn encode_attributes(out: &mut Vec<u8>, pm: &ProgressiveMesh, a: &PmAttributes) 
     }
 }
 
-/// Reads the attribute section written by [`encode_attributes`].
-fn decode_attributes(r: &mut Reader, base_faces: usize, added: &[usize]) -> Result<PmAttributes, MeshError> {
+/// Reads the attribute section written by [`encode_attributes`] (`extra`: the header says a
+/// channel table follows the mask).
+fn decode_attributes(
+    r: &mut Reader,
+    base_faces: usize,
+    added: &[usize],
+    extra: bool,
+) -> Result<PmAttributes, MeshError> {
     let mask = r.take(1)?[0];
-    check_mask(r, mask)?;
-    let width = 3 * (mask & ATTRIBUTE_NORMAL != 0) as usize
-        + 2 * (mask & ATTRIBUTE_UV != 0) as usize
-        + 4 * (mask & ATTRIBUTE_COLOR != 0) as usize
-        + (mask & ATTRIBUTE_MATERIAL != 0) as usize
-        + 8 * (mask & ATTRIBUTE_SKIN != 0) as usize
-        + 4 * (mask & ATTRIBUTE_TANGENT != 0) as usize
-        + 2 * (mask & ATTRIBUTE_UV1 != 0) as usize;
+    check_mask(r, mask, extra)?;
+    let mut channels = masked_channels(mask);
+    if extra {
+        channels.extend(read_channel_table(r)?);
+    }
+    if channels.is_empty() {
+        return Err(r.error("an attribute section without channels"));
+    }
+    let width: usize = channels.iter().map(|c| c.values.words_per_value()).sum();
     let count = r.varint()?;
-    // Each value takes 4 bytes per float: a count the remaining bytes cannot hold is refused
+    // Each value takes 4 bytes per word: a count the remaining bytes cannot hold is refused
     // before anything is allocated from it.
     if count.saturating_mul(4 * width as u64) > (r.bytes.len() - r.offset) as u64 {
         return Err(r.error(format!("{count} attribute values do not fit in the file")));
     }
-    let mut values = CornerAttributes {
-        normals: (mask & ATTRIBUTE_NORMAL != 0).then(Vec::new),
-        uvs: (mask & ATTRIBUTE_UV != 0).then(Vec::new),
-        colors: (mask & ATTRIBUTE_COLOR != 0).then(Vec::new),
-        uv_origin_top: mask & ATTRIBUTE_UV_ORIGIN_TOP != 0,
-        materials: (mask & ATTRIBUTE_MATERIAL != 0).then(Vec::new),
-        joints: (mask & ATTRIBUTE_SKIN != 0).then(Vec::new),
-        weights: (mask & ATTRIBUTE_SKIN != 0).then(Vec::new),
-        tangents: (mask & ATTRIBUTE_TANGENT != 0).then(Vec::new),
-        uvs1: (mask & ATTRIBUTE_UV1 != 0).then(Vec::new),
-        library: None,
-    };
+    let mut words = Vec::with_capacity(width);
     for _ in 0..count {
-        if let Some(n) = &mut values.normals {
-            n.push([r.f32()?, r.f32()?, r.f32()?]);
-        }
-        if let Some(u) = &mut values.uvs {
-            u.push([r.f32()?, r.f32()?]);
-        }
-        if let Some(c) = &mut values.colors {
-            c.push([r.f32()?, r.f32()?, r.f32()?, r.f32()?]);
-        }
-        if let Some(m) = &mut values.materials {
-            m.push(r.u32()?);
-        }
-        if let Some(j) = &mut values.joints {
-            let mut joint = [0u16; 4];
-            for x in &mut joint {
-                *x = u16::try_from(r.u32()?).map_err(|_| r.error("a joint number above 65535".to_string()))?;
+        for c in &mut channels {
+            let at = r.offset;
+            words.clear();
+            for _ in 0..c.values.words_per_value() {
+                words.push(r.u32()?);
             }
-            j.push(joint);
-        }
-        if let Some(w) = &mut values.weights {
-            w.push([r.f32()?, r.f32()?, r.f32()?, r.f32()?]);
-        }
-        if let Some(t) = &mut values.tangents {
-            t.push([r.f32()?, r.f32()?, r.f32()?, r.f32()?]);
-        }
-        if let Some(u) = &mut values.uvs1 {
-            u.push([r.f32()?, r.f32()?]);
+            if !c.values.push_words(&words) {
+                r.offset = at;
+                return Err(
+                    r.error(format!("a {} value that is not one (not finite, or out of range)", c.semantic.name()))
+                );
+            }
         }
     }
+    let values = attributes_of(channels, mask & ATTRIBUTE_UV_ORIGIN_TOP != 0);
     let index = |r: &mut Reader| -> Result<u32, MeshError> {
         let k = r.varint()?;
         if k >= count {
@@ -280,7 +260,7 @@ pub(super) fn decode(
     }
     let mut attributes = if flags & HAS_ATTRIBUTES != 0 {
         let added: Vec<usize> = splits.iter().map(|s| faces_added(s.vl, s.vr, s.hole)).collect();
-        Some(decode_attributes(&mut r, face_count, &added)?)
+        Some(decode_attributes(&mut r, face_count, &added, flags & HAS_CHANNELS != 0)?)
     } else {
         None
     };

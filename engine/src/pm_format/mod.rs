@@ -82,9 +82,9 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<(ProgressiveMesh, Option<Quan
         ));
     }
     let flags = u16::from_le_bytes(r.take(2)?.try_into().expect("2 bytes"));
-    if flags & !(HAS_ATTRIBUTES | HAS_MATERIALS) != 0
+    if flags & !(HAS_ATTRIBUTES | HAS_MATERIALS | HAS_CHANNELS) != 0
         || (version == 1 && flags != 0)
-        || (flags & HAS_MATERIALS != 0 && flags & HAS_ATTRIBUTES == 0)
+        || (flags & (HAS_MATERIALS | HAS_CHANNELS) != 0 && flags & HAS_ATTRIBUTES == 0)
     {
         return Err(MeshError::parse(path, "byte 6", format!("unknown flags {flags:#06x} for version {version}")));
     }
@@ -107,7 +107,8 @@ pub fn decode(bytes: &[u8], path: &Path) -> Result<(ProgressiveMesh, Option<Quan
         let mut pm = ProgressiveMesh::from_stream(base, splits).map_err(named)?;
         let mut quantization = Quantization { positions: grid, normal_bits: 0, uvs: None, colors: None, uvs1: None };
         if flags & HAS_ATTRIBUTES != 0 {
-            let (mut a, normal_bits, uvs, colors, uvs1) = compact::decode_attributes(&mut r, &pm)?;
+            let (mut a, normal_bits, uvs, colors, uvs1) =
+                compact::decode_attributes(&mut r, &pm, flags & HAS_CHANNELS != 0)?;
             quantization = Quantization { normal_bits, uvs, colors, uvs1, ..quantization };
             if flags & HAS_MATERIALS != 0 {
                 library_json::read_library(&mut r, &mut a)?;

@@ -263,55 +263,57 @@ pub(crate) fn subdivide_edges(mesh: &Mesh, topology: &Topology, split_edge: &[bo
 }
 
 /// The corner values of new faces given as (parent face, local corners): a parent corner's value,
-/// or for a midpoint the mean of its edge's two corners (normals made unit again; a material is
-/// the parent's).
+/// or for a midpoint the mean of its edge's two corners (normals and tangent directions made unit
+/// again, a tangent's handedness the first corner's, skins blended; an integer value, such as a
+/// material, the first corner's).
 fn interpolate_corners(
     parent: &crate::mesh::CornerAttributes,
     locals: &[(usize, [usize; 3])],
 ) -> crate::mesh::CornerAttributes {
+    use crate::mesh::{Semantic, Values};
     // The two parent corners a local corner averages (the same one twice for a corner).
     let ends = |f: usize, l: usize| if l < 3 { (3 * f + l, 3 * f + l) } else { (3 * f + l - 3, 3 * f + (l - 2) % 3) };
-    fn mean<const N: usize>(values: &[[f32; N]], (x, y): (usize, usize)) -> [f32; N] {
-        if x == y { values[x] } else { std::array::from_fn(|k| 0.5 * (values[x][k] + values[y][k])) }
-    }
     let corners = || locals.iter().flat_map(|&(f, l)| l.map(|l| ends(f, l)));
     let unit = |n: [f32; 3]| {
         let length = n.iter().map(|c| c * c).sum::<f32>().sqrt();
         if length > 0.0 && (length - 1.0).abs() > 1e-6 { n.map(|c| c / length) } else { n }
     };
-    crate::mesh::CornerAttributes {
-        uvs: parent.uvs.as_ref().map(|v| corners().map(|e| mean(v, e)).collect()),
-        uvs1: parent.uvs1.as_ref().map(|v| corners().map(|e| mean(v, e)).collect()),
-        normals: parent
-            .normals
-            .as_ref()
-            .map(|v| corners().map(|e| if e.0 == e.1 { v[e.0] } else { unit(mean(v, e)) }).collect()),
-        colors: parent.colors.as_ref().map(|v| corners().map(|e| mean(v, e)).collect()),
-        // A tangent's direction averaged and made unit again; its handedness the first corner's.
-        tangents: parent.tangents.as_ref().map(|v| {
-            corners()
-                .map(|e| {
-                    if e.0 == e.1 {
-                        return v[e.0];
-                    }
-                    let [x, y, z, _] = mean(v, e);
-                    let [x, y, z] = unit([x, y, z]);
-                    [x, y, z, v[e.0][3]]
-                })
-                .collect()
-        }),
-        joints: parent.joints.as_ref().map(|j| {
-            let w = parent.weights.as_ref().expect("joints come with weights");
-            corners().map(|e| blend_skin(j, w, e).0).collect()
-        }),
-        weights: parent.weights.as_ref().map(|w| {
-            let j = parent.joints.as_ref().expect("weights come with joints");
-            corners().map(|e| blend_skin(j, w, e).1).collect()
-        }),
-        materials: parent.materials.as_ref().map(|m| corners().map(|(x, _)| m[x]).collect()),
-        library: parent.library.clone(),
-        uv_origin_top: parent.uv_origin_top,
+    let mut out = parent.pick(std::iter::empty());
+    for c in parent.channels() {
+        let values = match (&c.semantic, &c.values) {
+            (Semantic::Normal, Values::F3(v)) => {
+                Values::F3(corners().map(|e| if e.0 == e.1 { v[e.0] } else { unit(mean(v, e)) }).collect())
+            }
+            (Semantic::Tangent, Values::F4(v)) => Values::F4(
+                corners()
+                    .map(|e| {
+                        if e.0 == e.1 {
+                            return v[e.0];
+                        }
+                        let [x, y, z, _] = mean(v, e);
+                        let [x, y, z] = unit([x, y, z]);
+                        [x, y, z, v[e.0][3]]
+                    })
+                    .collect(),
+            ),
+            (Semantic::Joints(set), Values::U16x4(j)) => match parent.channel(&Semantic::Weights(*set)) {
+                Some(Values::F4(w)) => Values::U16x4(corners().map(|e| blend_skin(j, w, e).0).collect()),
+                _ => c.values.means(corners()),
+            },
+            (Semantic::Weights(set), Values::F4(w)) => match parent.channel(&Semantic::Joints(*set)) {
+                Some(Values::U16x4(j)) => Values::F4(corners().map(|e| blend_skin(j, w, e).1).collect()),
+                _ => c.values.means(corners()),
+            },
+            (_, values) => values.means(corners()),
+        };
+        out.set(c.semantic.clone(), Some(values));
     }
+    out
+}
+
+/// The mean of values `x` and `y` (`x` itself when they are one).
+fn mean<const N: usize>(values: &[[f32; N]], (x, y): (usize, usize)) -> [f32; N] {
+    if x == y { values[x] } else { std::array::from_fn(|k| 0.5 * (values[x][k] + values[y][k])) }
 }
 
 /// The skin of a midpoint between corners `x` and `y`: each joint's weight averaged over the two,

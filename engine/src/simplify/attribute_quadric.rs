@@ -54,9 +54,9 @@ impl WedgeQuadrics {
     pub(super) fn new(mesh: &Mesh, value_id: &[u32], weights: [f64; 3]) -> Option<WedgeQuadrics> {
         let c = &mesh.corners;
         let scale = weights.map(|w| if w.is_finite() && w > 0.0 { w.sqrt() } else { 0.0 });
-        let uv = c.uvs.as_deref().filter(|_| scale[0] > 0.0);
-        let normal = c.normals.as_deref().filter(|_| scale[1] > 0.0);
-        let color = c.colors.as_deref().filter(|_| scale[2] > 0.0);
+        let uv = c.uvs().map(Vec::as_slice).filter(|_| scale[0] > 0.0);
+        let normal = c.normals().map(Vec::as_slice).filter(|_| scale[1] > 0.0);
+        let color = c.colors().map(Vec::as_slice).filter(|_| scale[2] > 0.0);
         let dims = uv.map_or(0, |_| 2) + normal.map_or(0, |_| 3) + color.map_or(0, |_| 4);
         if dims == 0 {
             return None;
@@ -237,7 +237,7 @@ mod tests {
             let [x, y, z] = mesh.positions[v as usize];
             [x * x + 0.3 * y, (y * 3.0).sin() + z]
         });
-        mesh.corners.uvs = Some(uvs.collect());
+        mesh.corners.set_uvs(Some(uvs.collect()));
         mesh
     }
 

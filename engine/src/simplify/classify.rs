@@ -612,8 +612,8 @@ mod tests {
             let length = (1.0 + tilt * tilt).sqrt();
             [tilt / length, 0.0, 1.0 / length]
         });
-        mesh.corners.uvs = Some(uvs.collect());
-        mesh.corners.normals = Some(normals.collect());
+        mesh.corners.set_uvs(Some(uvs.collect()));
+        mesh.corners.set_normals(Some(normals.collect()));
         mesh
     }
 
@@ -661,7 +661,7 @@ mod tests {
                 [p[0] / 8.0 + if k / 9 >= 3 { 1.0 } else { 0.0 }, p[1] / 8.0]
             })
             .collect();
-        halves.corners.uvs = Some(uvs);
+        halves.corners.set_uvs(Some(uvs));
         let options = SimplifyOptions::default();
         let (mut state, _) = State::new(&halves, &options);
         state.carry_attributes(&halves);

@@ -223,7 +223,7 @@ mod tests {
             let n = glam::Vec3::new(x + 0.4 * (5.0 * y).sin(), y, z + 0.4 * (4.0 * x).cos()).normalize();
             n.to_array()
         });
-        mesh.corners.normals = Some(normals.collect());
+        mesh.corners.set_normals(Some(normals.collect()));
         let weights = AttributeWeights { uv: 0.0, normal: 1.0, color: 0.0 };
         for (name, options) in [
             ("fan-distance term", SimplifyOptions { attribute_weights: weights, ..Default::default() }),

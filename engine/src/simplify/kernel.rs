@@ -191,7 +191,7 @@ impl<'o> State<'o> {
                 // error at 2-5x meshoptimizer's time (docs/attributes-report.md).
                 fan_term: match options.metric {
                     Metric::Melax => 0.0,
-                    _ if options.guard > 0.0 || mesh.corners.uvs.is_some() => 0.0,
+                    _ if options.guard > 0.0 || mesh.corners.uvs().is_some() => 0.0,
                     _ => options.distance_term,
                 },
                 per_area: false,
@@ -295,7 +295,7 @@ impl<'o> State<'o> {
                 if same {
                     continue;
                 }
-                let weight = match (spoke, &mesh.corners.uvs) {
+                let weight = match (spoke, &mesh.corners.uvs()) {
                     (None, _) => SEAM_WEIGHT,
                     (Some((v, corner)), Some(uvs)) if uvs[3 * f + corner] != uvs[self.source_at(g, v) as usize] => {
                         SPOKE_WEIGHT

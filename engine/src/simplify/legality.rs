@@ -281,8 +281,8 @@ impl State<'_> {
             self.seams.on_seam[v as usize] = false;
             return true;
         }
-        let bits = |uv: &Option<Vec<[f32; 2]>>, k: u32| uv.as_ref().map(|uv| uv[k as usize].map(f32::to_bits));
-        let uvs = |k: u32| (bits(&self.seams.attributes.uvs, k), bits(&self.seams.attributes.uvs1, k));
+        let bits = |uv: Option<&Vec<[f32; 2]>>, k: u32| uv.map(|uv| uv[k as usize].map(f32::to_bits));
+        let uvs = |k: u32| (bits(self.seams.attributes.uvs(), k), bits(self.seams.attributes.uvs1(), k));
         if count != 2 || uvs(sets[0]) != uvs(sets[1]) {
             return false;
         }

@@ -67,7 +67,7 @@ impl Placement {
     /// The placement `Auto` stands for on `mesh`; others are themselves.
     pub fn resolve(self, mesh: &crate::mesh::Mesh) -> Placement {
         match self {
-            Placement::Auto if mesh.corners.uvs.is_some() => Placement::Endpoint,
+            Placement::Auto if mesh.corners.uvs().is_some() => Placement::Endpoint,
             Placement::Auto => Placement::Optimal,
             other => other,
         }

@@ -207,7 +207,7 @@ mod tests {
                 [[0.0, 0.0, if upper { 1.0 } else { -1.0 }]; 3]
             })
             .collect();
-        halves.corners.normals = Some(normals);
+        halves.corners.set_normals(Some(normals));
         // (As `simplify` resolves `Auto` for a mesh without texture coordinates.)
         let options = SimplifyOptions { placement: Placement::Optimal, ..Default::default() };
         let mut seam_pairs = 0;

@@ -97,7 +97,7 @@ impl SeamCarrier {
         dead: &[u32; 2],
         sides: [(u32, u32); 2],
     ) -> bool {
-        let Some(uv) = &self.attributes.uvs else { return true };
+        let Some(uv) = &self.attributes.uvs() else { return true };
         let [(b_first, a_first), (_, a_second)] = sides;
         let area = |s: [u32; 3]| {
             let [p, q, r] = s.map(|k| uv[k as usize].map(f64::from));

@@ -109,7 +109,7 @@ fn values_of(mesh: &Mesh, f: u32, g: u32) -> Option<bool> {
     if pairs.iter().all(|&(a, b)| c.same(a, b)) {
         return Some(false);
     }
-    let normals = c.normals.as_ref()?;
+    let normals = c.normals()?;
     let bits = |n: [f32; 3]| n.map(f32::to_bits);
     let turned = |a: usize, b: usize| bits(normals[a].map(|x| -x)) == bits(normals[b]);
     pairs.iter().all(|&(a, b)| turned(a, b) && c.same_but_normals(a, b)).then_some(true)
@@ -163,7 +163,7 @@ pub(super) fn with_backs(mut out: Mesh, live: impl Iterator<Item = usize>, backs
     if !out.corners.is_empty() {
         let reversed = backed.iter().flat_map(|&(i, _)| [3 * i, 3 * i + 2, 3 * i + 1]);
         out.corners = out.corners.pick((0..3 * n).chain(reversed));
-        if let Some(normals) = &mut out.corners.normals {
+        if let Some(normals) = out.corners.normals_mut() {
             for (k, _) in backed.iter().enumerate().filter(|(_, (_, back))| *back == Back::Flipped) {
                 for n in &mut normals[3 * (n + k)..3 * (n + k + 1)] {
                     *n = n.map(|x| -x);
@@ -248,20 +248,20 @@ mod tests {
                 [[u.x as f32, u.y as f32, u.z as f32]; 3]
             })
             .collect();
-        front.corners.normals = Some(normals.clone());
+        front.corners.set_normals(Some(normals.clone()));
         let mut both = front.clone();
         both.triangles.extend(front.triangles.iter().map(|&t| reversed(t)));
         // The back's corners in its own order (a, c, b): the front's normals there, turned round.
         let turned = |k: usize| normals[k].map(|x| -x);
         let back_normals = (0..n).flat_map(|f| [turned(3 * f), turned(3 * f + 2), turned(3 * f + 1)]);
-        both.corners.normals = Some(normals.iter().copied().chain(back_normals).collect());
+        both.corners.set_normals(Some(normals.iter().copied().chain(back_normals).collect()));
         let alone = simplify(&front, &to(n / 8)).unwrap();
         let out = simplify(&both, &to(2 * (n / 8))).unwrap();
         assert_eq!(out.stats.back_faces, n, "{:?}", out.stats);
         let k = alone.mesh.face_count();
         assert_eq!(out.mesh.face_count(), 2 * k);
         assert_eq!(out.mesh.triangles[..k], alone.mesh.triangles[..]);
-        let (got, kept) = (out.mesh.corners.normals.unwrap(), alone.mesh.corners.normals.unwrap());
+        let (got, kept) = (out.mesh.corners.normals().unwrap(), alone.mesh.corners.normals().unwrap());
         assert_eq!(got[..3 * k], kept[..]);
         for i in 0..k {
             let back = [kept[3 * i], kept[3 * i + 2], kept[3 * i + 1]].map(|n| n.map(|x| -x));
@@ -284,7 +284,7 @@ mod tests {
         let corners = copied.face_count() * 3;
         let uvs = (0..corners).map(|k| if k < sphere.face_count() * 3 { [0.0, 0.0] } else { [1.0, 1.0] }).collect();
         let mut distinct: Mesh = copied.clone();
-        distinct.corners.uvs = Some(uvs);
+        distinct.corners.set_uvs(Some(uvs));
         let out = simplify(&distinct, &options).unwrap();
         assert_eq!(out.stats.dropped_duplicate_faces, 0);
         assert!(out.stats.frozen_vertices > 0, "{:?}", out.stats);

@@ -75,25 +75,25 @@ pub fn assert_compact_round_trip(name: &str, pm: &meshlod_engine::pm::Progressiv
         }
         let (x, y) = (&a.corners, &b.corners);
         assert_eq!(x.names(), y.names(), "{name}: level {level}");
-        assert_eq!(x.materials, y.materials, "{name}: level {level} materials");
+        assert_eq!(x.materials(), y.materials(), "{name}: level {level} materials");
         assert_eq!(x.uv_origin_top, y.uv_origin_top, "{name}");
-        if let (Some(u), Some(v), Some(g)) = (&x.uvs, &y.uvs, &q.uvs) {
+        if let (Some(u), Some(v), Some(g)) = (x.uvs(), y.uvs(), &q.uvs) {
             for (s, t) in u.iter().zip(v) {
                 assert!(close(s[0], t[0], g.step[0]) && close(s[1], t[1], g.step[1]), "{name}: uv {s:?} → {t:?}");
             }
         }
-        if let (Some(u), Some(v), Some(g)) = (&x.uvs1, &y.uvs1, &q.uvs1) {
+        if let (Some(u), Some(v), Some(g)) = (x.uvs1(), y.uvs1(), &q.uvs1) {
             for (s, t) in u.iter().zip(v) {
                 assert!(close(s[0], t[0], g.step[0]) && close(s[1], t[1], g.step[1]), "{name}: uv1 {s:?} → {t:?}");
             }
         }
-        if let (Some(c), Some(d), Some(g)) = (&x.colors, &y.colors, &q.colors) {
+        if let (Some(c), Some(d), Some(g)) = (x.colors(), y.colors(), &q.colors) {
             for (s, t) in c.iter().zip(d) {
                 assert!((0..4).all(|k| close(s[k], t[k], g.step[k])), "{name}: colour {s:?} → {t:?}");
             }
         }
         // Skins: weights within a 255th, normalised, the joints of every weight kept.
-        if let (Some(jx), Some(wx), Some(jy), Some(wy)) = (&x.joints, &x.weights, &y.joints, &y.weights) {
+        if let (Some(jx), Some(wx), Some(jy), Some(wy)) = (x.joints(), x.weights(), y.joints(), y.weights()) {
             for k in 0..jx.len() {
                 let total: f32 = wx[k].iter().sum();
                 assert!((wy[k].iter().sum::<f32>() - 1.0).abs() < 1e-5, "{name}: weights {:?}", wy[k]);
@@ -103,7 +103,7 @@ pub fn assert_compact_round_trip(name: &str, pm: &meshlod_engine::pm::Progressiv
                 }
             }
         }
-        if let (Some(t), Some(u)) = (&x.tangents, &y.tangents) {
+        if let (Some(t), Some(u)) = (x.tangents(), y.tangents()) {
             for (s, r) in t.iter().zip(u) {
                 let length = (s[..3].iter().map(|c| (*c as f64).powi(2)).sum::<f64>()).sqrt();
                 assert_eq!(s[3] < 0.0, r[3] < 0.0, "{name}: tangent handedness {s:?} → {r:?}");
@@ -114,7 +114,7 @@ pub fn assert_compact_round_trip(name: &str, pm: &meshlod_engine::pm::Progressiv
                 assert!(dot.min(1.0).acos().to_degrees() <= 0.1, "{name}: tangent {s:?} → {r:?}");
             }
         }
-        if let (Some(n), Some(m)) = (&x.normals, &y.normals) {
+        if let (Some(n), Some(m)) = (x.normals(), y.normals()) {
             for (s, t) in n.iter().zip(m) {
                 let length = (s.iter().map(|c| (*c as f64).powi(2)).sum::<f64>()).sqrt();
                 if length < 1e-6 {

@@ -72,6 +72,43 @@ pub(crate) fn quantized<const N: usize>(
     ))
 }
 
+/// Any accessor's elements as floats, whatever its component type: floats through the crate's
+/// reader (sparse ones too), integers as [`quantized`] converts them. `Err` when it does not have
+/// `N` components.
+pub(crate) fn any_floats<const N: usize>(
+    primitive: &gltf::Primitive,
+    semantic: &gltf::Semantic,
+    buffers: &[Vec<u8>],
+) -> Result<Option<Vec<[f32; N]>>, String> {
+    let Some(accessor) = primitive.get(semantic) else { return Ok(None) };
+    if let Some(values) = quantized::<N>(primitive, semantic, buffers)? {
+        return Ok(Some(values));
+    }
+    if accessor.dimensions().multiplicity() != N {
+        return Err(format!(
+            "{} has {} components, not {N}",
+            semantic.to_string(),
+            accessor.dimensions().multiplicity()
+        ));
+    }
+    use gltf::accessor::Iter;
+    let data = |b: gltf::Buffer| buffers.get(b.index()).map(Vec::as_slice);
+    let flat: Option<Vec<f32>> = match N {
+        1 => Iter::<f32>::new(accessor, data).map(|i| i.collect()),
+        2 => Iter::<[f32; 2]>::new(accessor, data).map(|i| i.flatten().collect()),
+        3 => Iter::<[f32; 3]>::new(accessor, data).map(|i| i.flatten().collect()),
+        4 => Iter::<[f32; 4]>::new(accessor, data).map(|i| i.flatten().collect()),
+        _ => None,
+    };
+    let flat = flat.ok_or_else(|| format!("{} cannot be read", semantic.to_string()))?;
+    Ok(Some(flat.chunks_exact(N).map(|c| std::array::from_fn(|k| c[k])).collect()))
+}
+
+/// `Err` unless attribute `what` has one value (`got`) for each of the `n` positions.
+pub(crate) fn same_count(what: &str, got: usize, n: usize) -> Result<(), String> {
+    if got == n { Ok(()) } else { Err(format!("{what} has {got} values for {n} positions")) }
+}
+
 /// Little-endian bytes of `values`, one element after another.
 pub(crate) fn floats<const N: usize>(values: impl Iterator<Item = [f32; N]>) -> Vec<u8> {
     values.flat_map(|v| v.into_iter().flat_map(f32::to_le_bytes)).collect()

@@ -6,7 +6,9 @@
 //! node's world transform (normals by the inverse transpose; mirrored nodes keep their faces
 //! counter-clockwise) and merged into one mesh. Kept per corner: NORMAL and TANGENT when every
 //! primitive has them, TEXCOORD_0, TEXCOORD_1 and COLOR_0 when some primitive has them (the others
-//! given the values glTF draws them with: `merge`), and JOINTS_0 / WEIGHTS_0 of a skinned asset.
+//! given the values glTF draws them with: `merge`), JOINTS_0 / WEIGHTS_0 of a skinned asset, and
+//! further texture coordinate and colour sets and application-specific attributes as channels
+//! (`super::channels`).
 //! What is left out is said. glTF splits a vertex wherever its attributes differ (seams,
 //! hard edges) and exporters often between primitives too: the cut is joined again
 //! ([`Mesh::join_cut_seams`]), so the surface is one piece with seams, not cut open.
@@ -24,11 +26,12 @@ use base64::Engine as _;
 use glam::{DMat3, DMat4, DVec3};
 use gltf::mesh::Mode;
 
-use super::accessor::{finite, quantized};
+use super::accessor::{finite, quantized, same_count};
+use super::channels::{extra_channel, extra_channels, merge_extra};
 use super::checks;
 use crate::error::MeshError;
 use crate::io::options::ReadLimits;
-use crate::mesh::{CornerAttributes, Image, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL, Rig};
+use crate::mesh::{Channel, CornerAttributes, Image, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL, Rig};
 
 /// Extensions whose data meshlod cannot decode; a file that requires one is refused by name.
 const UNSUPPORTED: [&str; 2] = ["KHR_draco_mesh_compression", "EXT_meshopt_compression"];
@@ -60,6 +63,8 @@ struct Part {
     /// Vertices whose weights were scaled to sum to 1.
     mended: usize,
     material: u32,
+    /// The attributes beyond those above ([`extra_channels`]), per corner.
+    extra: Vec<Channel>,
 }
 
 /// Reads glTF or GLB bytes. `folder`: where relative buffer URIs are resolved (the file's folder);
@@ -366,10 +371,11 @@ fn library(
             if primitive.morph_targets().next().is_some() {
                 note("morph targets".into());
             }
-            for (semantic, _) in primitive.attributes() {
+            for (semantic, accessor) in primitive.attributes() {
                 let name = semantic.to_string();
                 let skin = matches!(name.as_str(), "JOINTS_0" | "WEIGHTS_0") && rig.is_some();
                 if !skin
+                    && extra_channel(&semantic, &accessor).is_none()
                     && !matches!(
                         name.as_str(),
                         "POSITION" | "NORMAL" | "TANGENT" | "TEXCOORD_0" | "TEXCOORD_1" | "COLOR_0"
@@ -607,7 +613,11 @@ fn read_primitive(
     let joints = joints.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let weights = weights.map(|v| triangles.iter().flatten().map(|&i| v[i as usize]).collect());
     let material = primitive.material().index().map_or(NO_MATERIAL, |m| m as u32);
-    Ok(Part { positions, triangles, normals, tangents, uvs, uvs1, colors, joints, weights, material, mended })
+    let extra = extra_channels(primitive, &reader, buffers, n)?
+        .into_iter()
+        .map(|c| Channel { values: c.values.pick(triangles.iter().flatten().map(|&v| v as usize)), ..c })
+        .collect();
+    Ok(Part { positions, triangles, normals, tangents, uvs, uvs1, colors, joints, weights, material, mended, extra })
 }
 
 /// The triangles of a surface primitive's `indices` in its `mode` (strips and fans unrolled).
@@ -665,11 +675,6 @@ fn skin_of(
     Ok((joints, weights, mended))
 }
 
-/// `Err` unless attribute `what` has one value (`got`) for each of the `n` positions.
-fn same_count(what: &str, got: usize, n: usize) -> Result<(), String> {
-    if got == n { Ok(()) } else { Err(format!("{what} has {got} values for {n} positions")) }
-}
-
 /// `Err` unless attribute `what`, where the primitive has it, has one finite value for each of the
 /// `n` positions.
 fn per_vertex<const N: usize>(what: &str, values: Option<&[[f32; N]]>, n: usize) -> Result<(), String> {
@@ -684,7 +689,7 @@ fn per_vertex<const N: usize>(what: &str, values: Option<&[[f32; N]]>, n: usize)
 /// textured body beside an untextured part lost its texture. Normals and tangents are kept when
 /// every part has them (glTF draws a primitive without normals flat, which per-corner values could
 /// hold but the simplifier could then not move), and said otherwise.
-fn merge(parts: Vec<Part>, library: MaterialLibrary, path: &Path) -> Result<Mesh, MeshError> {
+fn merge(mut parts: Vec<Part>, library: MaterialLibrary, path: &Path) -> Result<Mesh, MeshError> {
     let keep_normals = parts.iter().all(|p| p.normals.is_some());
     let keep_tangents = parts.iter().all(|p| p.tangents.is_some());
     let keep_uvs = parts.iter().any(|p| p.uvs.is_some());
@@ -707,47 +712,51 @@ fn merge(parts: Vec<Part>, library: MaterialLibrary, path: &Path) -> Result<Mesh
             "the input's skin weights (WEIGHTS_0) summed to other than 1 at {mended} vertices: scaled to sum to 1, as glTF requires"
         ));
     }
+    let extra: Vec<Vec<Channel>> = parts.iter_mut().map(|p| std::mem::take(&mut p.extra)).collect();
+    let corner_counts: Vec<usize> = parts.iter().map(|p| 3 * p.triangles.len()).collect();
+    let extra = merge_extra(&extra, &corner_counts, &mut library);
     let mut mesh = Mesh::default();
-    let mut corners = CornerAttributes {
-        normals: keep_normals.then(Vec::new),
-        tangents: keep_tangents.then(Vec::new),
-        uvs: keep_uvs.then(Vec::new),
-        uvs1: keep_uvs1.then(Vec::new),
-        colors: keep_colors.then(Vec::new),
-        joints: keep_skin.then(Vec::new),
-        weights: keep_skin.then(Vec::new),
-        materials: Some(Vec::new()),
-        library: Some(std::sync::Arc::new(library)),
-        uv_origin_top: true,
-    };
+    let mut corners = CornerAttributes::default();
+    (corners.library, corners.uv_origin_top) = (Some(std::sync::Arc::new(library)), true);
+    corners.set_normals(keep_normals.then(Vec::new));
+    corners.set_tangents(keep_tangents.then(Vec::new));
+    corners.set_uvs(keep_uvs.then(Vec::new));
+    corners.set_uvs1(keep_uvs1.then(Vec::new));
+    corners.set_colors(keep_colors.then(Vec::new));
+    corners.set_joints(keep_skin.then(Vec::new));
+    corners.set_weights(keep_skin.then(Vec::new));
+    corners.set_materials(Some(Vec::new()));
     for part in parts {
-        if let Some(all) = &mut corners.materials {
+        if let Some(all) = corners.materials_mut() {
             all.extend(std::iter::repeat_n(part.material, 3 * part.triangles.len()));
         }
         let offset = mesh.positions.len() as u32;
         mesh.positions.extend(part.positions);
         mesh.triangles.extend(part.triangles.iter().map(|t| t.map(|v| v + offset)));
-        if let (Some(all), Some(these)) = (&mut corners.normals, part.normals) {
+        if let (Some(all), Some(these)) = (corners.normals_mut(), part.normals) {
             all.extend(these);
         }
-        if let (Some(all), Some(these)) = (&mut corners.tangents, part.tangents) {
+        if let (Some(all), Some(these)) = (corners.tangents_mut(), part.tangents) {
             all.extend(these);
         }
-        if let Some(all) = &mut corners.uvs {
+        if let Some(all) = corners.uvs_mut() {
             all.extend(part.uvs.unwrap_or_else(|| vec![[0.0; 2]; 3 * part.triangles.len()]));
         }
-        if let Some(all) = &mut corners.uvs1 {
+        if let Some(all) = corners.uvs1_mut() {
             all.extend(part.uvs1.unwrap_or_else(|| vec![[0.0; 2]; 3 * part.triangles.len()]));
         }
-        if let Some(all) = &mut corners.colors {
+        if let Some(all) = corners.colors_mut() {
             all.extend(part.colors.unwrap_or_else(|| vec![[1.0; 4]; 3 * part.triangles.len()]));
         }
-        if let (Some(all), Some(these)) = (&mut corners.joints, part.joints) {
+        if let (Some(all), Some(these)) = (corners.joints_mut(), part.joints) {
             all.extend(these);
         }
-        if let (Some(all), Some(these)) = (&mut corners.weights, part.weights) {
+        if let (Some(all), Some(these)) = (corners.weights_mut(), part.weights) {
             all.extend(these);
         }
+    }
+    for (semantic, values) in extra {
+        corners.set(semantic, Some(values));
     }
     if mesh.positions.is_empty() {
         corners = CornerAttributes::default();

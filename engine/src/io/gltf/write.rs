@@ -28,7 +28,9 @@ use serde_json::{Value, json};
 use super::accessor::{bounds, floats};
 use crate::io::files::{read_referenced, relative_uri, sniff_image};
 use crate::io::options::WriteOptions;
-use crate::mesh::{CornerAttributes, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL, OtherPrimitive};
+use crate::mesh::{
+    CornerAttributes, ImageSource, MaterialLibrary, Mesh, NO_MATERIAL, OtherPrimitive, Semantic, Values,
+};
 
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
@@ -135,7 +137,7 @@ pub fn write_gltf_with(
 ) -> std::io::Result<()> {
     let corners = &mesh.corners;
     let quantize = options.quantize;
-    let rig = corners.library.as_ref().and_then(|l| l.rig.as_ref()).filter(|_| corners.joints.is_some());
+    let rig = corners.library.as_ref().and_then(|l| l.rig.as_ref()).filter(|_| corners.joints().is_some());
     // Whether an accessor uses the extension's integer types (a mesh with nothing to quantize
     // does not need it).
     let mut quantized = false;
@@ -243,7 +245,7 @@ impl VertexAccessors<'_> {
     /// allows. Whether any is stored as KHR_mesh_quantization's integer types.
     fn add_corner_values(&mut self, corners: &CornerAttributes, source: &[usize], quantize: bool) -> bool {
         let mut quantized = false;
-        if let Some(normals) = &corners.normals {
+        if let Some(normals) = &corners.normals() {
             let values = (0..self.count).map(|i| unit(normals[source[i]]));
             let stored = if quantize {
                 quantized = true;
@@ -255,7 +257,7 @@ impl VertexAccessors<'_> {
             };
             self.add("NORMAL", "VEC3", stored);
         }
-        if let Some(tangents) = &corners.tangents {
+        if let Some(tangents) = &corners.tangents() {
             let values = (0..self.count).map(|i| {
                 let t = tangents[source[i]];
                 let [x, y, z] = unit([t[0], t[1], t[2]]);
@@ -294,7 +296,7 @@ impl VertexAccessors<'_> {
             quantized |= stored.component != FLOAT;
             self.add(name, "VEC2", stored);
         }
-        if let Some(colors) = &corners.colors {
+        if let Some(colors) = &corners.colors() {
             let values = (0..self.count).map(|i| colors[source[i]].map(|c| c.clamp(0.0, 1.0)));
             let stored = if quantize {
                 let bytes = values.flat_map(|c| c.map(unorm16)).flatten().collect();
@@ -304,13 +306,44 @@ impl VertexAccessors<'_> {
             };
             self.add("COLOR_0", "VEC4", stored);
         }
-        if let (Some(joints), Some(weights)) = (&corners.joints, &corners.weights) {
+        if let (Some(joints), Some(weights)) = (&corners.joints(), &corners.weights()) {
             let bytes =
                 (0..self.count).flat_map(|i| joints[source[i]].into_iter().flat_map(u16::to_le_bytes)).collect();
             self.add("JOINTS_0", "VEC4", Stored { bytes, component: UNSIGNED_SHORT, normalized: false, stride: None });
             self.add("WEIGHTS_0", "VEC4", Stored::floats((0..self.count).map(|i| weights[source[i]])));
         }
+        self.add_extra_channels(corners, source);
         quantized
+    }
+
+    /// The channels beyond the ones written above, as they are: TEXCOORD_n past the second set
+    /// (with v down, as glTF has it), COLOR_n past the first, and custom channels by their name.
+    fn add_extra_channels(&mut self, corners: &CornerAttributes, source: &[usize]) {
+        for c in corners.channels() {
+            let (name, flip) = match &c.semantic {
+                Semantic::TexCoord(k @ 2..) => (format!("TEXCOORD_{k}"), !corners.uv_origin_top),
+                Semantic::Color(k @ 1..) => (format!("COLOR_{k}"), false),
+                Semantic::Custom(name) => (name.clone(), false),
+                _ => continue,
+            };
+            let picked = c.values.pick((0..self.count).map(|i| source[i]));
+            let (kind, stored) = match picked {
+                Values::F1(v) => ("SCALAR", Stored::floats(v.into_iter())),
+                Values::F2(v) if flip => ("VEC2", Stored::floats(v.into_iter().map(|[u, v]| [u, 1.0 - v]))),
+                Values::F2(v) => ("VEC2", Stored::floats(v.into_iter())),
+                Values::F3(v) => ("VEC3", Stored::floats(v.into_iter())),
+                Values::F4(v) => ("VEC4", Stored::floats(v.into_iter())),
+                Values::U16x4(v) => {
+                    let bytes = v.into_iter().flat_map(|j| j.into_iter().flat_map(u16::to_le_bytes)).collect();
+                    ("VEC4", Stored { bytes, component: UNSIGNED_SHORT, normalized: false, stride: None })
+                }
+                Values::U32(v) => {
+                    let bytes = v.into_iter().flat_map(u32::to_le_bytes).collect();
+                    ("SCALAR", Stored { bytes, component: UNSIGNED_INT, normalized: false, stride: None })
+                }
+            };
+            self.add(&name, kind, stored);
+        }
     }
 }
 
@@ -326,7 +359,7 @@ fn primitives_by_material(
     buffer: &mut Buffer,
 ) -> Vec<Value> {
     let corners = &mesh.corners;
-    let material_of = |f: usize| corners.materials.as_ref().map_or(NO_MATERIAL, |m| m[3 * f]);
+    let material_of = |f: usize| corners.materials().map_or(NO_MATERIAL, |m| m[3 * f]);
     let mut groups: Vec<(u32, Vec<usize>)> = Vec::new();
     let mut group_of: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
     for f in 0..mesh.face_count() {
