@@ -8,6 +8,7 @@
 pub mod appearance;
 pub mod attributes;
 pub mod bvh;
+pub mod compare;
 pub mod datasets;
 pub mod error;
 mod fan;

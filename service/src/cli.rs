@@ -10,6 +10,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use meshlod_engine::compare::CompareOptions;
 use meshlod_engine::hausdorff::HausdorffOptions;
 use meshlod_engine::io::WriteOptions;
 use meshlod_service::convert::MeshLimits;
@@ -26,6 +27,30 @@ use crate::samples::SamplesArgs;
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
+}
+
+/// How `compare` renders (also `simplify --compare`).
+#[derive(Debug, Clone, Args)]
+pub struct CompareArgs {
+    /// Number of views, spread over the sphere around A.
+    #[arg(long, default_value_t = CompareOptions::DEFAULT_VIEWS)]
+    pub views: usize,
+    /// Width and height of each view, in pixels.
+    #[arg(long, default_value_t = CompareOptions::DEFAULT_SIZE)]
+    pub size: usize,
+    /// Write the pictures as a PNG: a row per view, A | B | their difference as a heat map.
+    #[arg(long, value_name = "FILE")]
+    pub png: Option<PathBuf>,
+    /// Leave out the Hausdorff distance (pixels only).
+    #[arg(long)]
+    pub no_hausdorff: bool,
+}
+
+impl CompareArgs {
+    /// The engine's options.
+    pub fn options(&self) -> CompareOptions {
+        CompareOptions { views: self.views, size: self.size, hausdorff: !self.no_hausdorff }
+    }
 }
 
 /// Every subcommand.
@@ -82,6 +107,20 @@ pub enum Command {
         /// (the symmetric search proves the smaller direction only below the larger one).
         #[arg(long)]
         directed: bool,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Compare two meshes as a viewer sees them: both rendered from the same views around A with
+    /// their textures, vertex colours and normals, and the pictures compared pixel by pixel
+    /// (mean difference, PSNR, silhouette), beside the certified Hausdorff distance.
+    Compare {
+        /// Reference mesh A (the views are around it; its bounding box defines the units).
+        a: PathBuf,
+        /// Mesh B (a LOD of A, say).
+        b: PathBuf,
+        #[command(flatten)]
+        compare: CompareArgs,
         /// Print one JSON object instead of text.
         #[arg(long)]
         json: bool,

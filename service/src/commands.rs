@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
+use meshlod_engine::compare::{CompareReport, compare};
 use meshlod_engine::hausdorff::{HausdorffOptions, HausdorffReport, directed_hausdorff, hausdorff};
 use meshlod_engine::io::{WriteOptions, output_format, write_mesh, write_mesh_with};
 use meshlod_engine::pm_format::{encode, read_pm};
@@ -22,7 +23,8 @@ use meshlod_service::server::{ServerConfig, serve_with_listener, shutdown_signal
 use serde_json::Value;
 
 use crate::cli::{
-    Cli, ClientOperation, Command, HealthArgs, LogFormat, PredictArgs, RefineArgs, ServeArgs, Shape, SimplifyArgs,
+    Cli, ClientOperation, Command, CompareArgs, HealthArgs, LogFormat, PredictArgs, RefineArgs, ServeArgs, Shape,
+    SimplifyArgs,
 };
 
 /// `println!` that hands a failed write back as an error instead of panicking: a reader that
@@ -46,6 +48,7 @@ pub fn run(cli: Cli) -> Result<()> {
             let options = HausdorffOptions { samples, seed, tolerance, cancel: None };
             measure(&a, &b, &options, directed, json)
         }
+        Command::Compare { a, b, compare, json } => compare_files(&a, &b, &compare, json),
         Command::Generate { shape, output, resolution } => generate(shape, &output, resolution),
         Command::Simplify(args) => run_simplify(&local(), &args),
         Command::Refine(args) => run_refine(&local(), &args),
@@ -319,6 +322,40 @@ fn measure(a: &Path, b: &Path, options: &HausdorffOptions, directed: bool, json:
         return print_json(&report::hausdorff_full(&r));
     }
     print_hausdorff(&r)
+}
+
+/// `meshlod compare`: renders of A and B compared, the figures printed, the pictures written
+/// when asked.
+fn compare_files(a: &Path, b: &Path, args: &CompareArgs, json: bool) -> Result<()> {
+    let (mesh_a, mesh_b) = (load(a)?, load(b)?);
+    let comparison = with_progress("rendering".into(), || compare(&mesh_a, &mesh_b, &args.options()))?;
+    if let Some(png) = &args.png {
+        comparison.write_png(png)?;
+    }
+    let r = &comparison.report;
+    warn_all(&r.notes);
+    if json {
+        return print_json(r);
+    }
+    print_compare(r)
+}
+
+/// The figures of a comparison in text.
+pub(crate) fn print_compare(r: &CompareReport) -> Result<()> {
+    out!(
+        "pixels: mean difference {} levels of 255, PSNR {}, silhouette {} % ({} views of {} px; {} faces against {})",
+        sig(r.mae),
+        r.psnr.map_or("∞ (the same pictures)".to_string(), |p| format!("{} dB", sig(p))),
+        sig(100.0 * r.silhouette),
+        r.views,
+        r.size,
+        r.faces_b,
+        r.faces_a
+    );
+    if let (Some(upper), Some(lower), Some(pct)) = (r.hausdorff, r.hausdorff_lower, r.hausdorff_diag_pct) {
+        out!("Hausdorff ≤ {} paper units (≥ {}, certified; {} % of the diagonal)", sig(upper), sig(lower), sig(pct));
+    }
+    Ok(())
 }
 
 /// `meshlod hausdorff` in text: the certified figure first, then how it was obtained.
