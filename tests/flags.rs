@@ -84,7 +84,16 @@ fn local_and_client_runs_of_a_gltf_with_a_warning_print_the_same_report_and_writ
     let run = |remote: bool, json: bool| {
         let output = dir.join(format!("{}-{json}.glb", if remote { "remote" } else { "local" }));
         let mut args = if remote { vec!["client", "--server", server.address.as_str()] } else { vec![] };
-        args.extend_from_slice(&["simplify", s(&input), "-o", s(&output), "--keep", "0.25", "--hausdorff"]);
+        args.extend_from_slice(&[
+            "simplify",
+            s(&input),
+            "-o",
+            s(&output),
+            "--keep",
+            "0.25",
+            "--hausdorff",
+            "--compare",
+        ]);
         if json {
             args.push("--json");
         }
@@ -108,6 +117,8 @@ fn local_and_client_runs_of_a_gltf_with_a_warning_print_the_same_report_and_writ
     }
     assert_eq!(local, remote, "the same report, but for the engine's time");
     assert!((local["kept_fraction"].as_f64().unwrap() - 0.25).abs() < 0.01, "{local}");
+    // The comparison in pixels, measured on the server as here (the same figures: deterministic).
+    assert!(local["pixels_mae"].as_f64().unwrap() > 0.0 && local["pixels_views"] == 12, "{local}");
     assert_eq!(local_bytes, remote_bytes, "the same GLB bytes");
     let json_length = u32::from_le_bytes(local_bytes[12..16].try_into().unwrap()) as usize;
     let written = String::from_utf8_lossy(&local_bytes[20..20 + json_length]).to_string();
@@ -444,4 +455,28 @@ fn whole_runs_one_sequence_and_the_report_says_when_a_run_went_in_halves() {
     assert_eq!(client(&[])["halves"], Value::Bool(true));
     assert_eq!(client(&["--whole"])["halves"], Value::Bool(false));
     assert_eq!(client(&[])["collapses"], halves["collapses"]);
+}
+
+#[test]
+fn compare_prints_pixels_and_distance_and_writes_the_pictures() {
+    let dir = tempdir("compare");
+    let obj = dir.join("torus.obj");
+    ok(&["generate", "torus", "-o", s(&obj), "--resolution", "24"]);
+    let lod = dir.join("lod.glb");
+    ok(&["simplify", s(&obj), "-o", s(&lod), "--keep", "0.3"]);
+    let png = dir.join("compare.png");
+    let report = ok_json(&["compare", s(&obj), s(&lod), "--views", "3", "--size", "32", "--png", s(&png), "--json"]);
+    let expected = ["faces_a", "faces_b", "hausdorff", "hausdorff_diag_pct", "hausdorff_lower", "mae", "notes"];
+    let expected: BTreeSet<String> =
+        expected.iter().chain(&["psnr", "silhouette", "size", "views"]).map(|k| k.to_string()).collect();
+    assert_eq!(keys(&report), expected);
+    assert!(report["mae"].as_f64().unwrap() > 0.0 && report["hausdorff"].as_f64().unwrap() > 0.0, "{report}");
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[1..4], b"PNG");
+    let (width, height) =
+        (u32::from_be_bytes(bytes[16..20].try_into().unwrap()), u32::from_be_bytes(bytes[20..24].try_into().unwrap()));
+    assert_eq!((width, height), (3 * 32, 3 * 32), "three tiles per view, a row per view");
+    let text = String::from_utf8(ok(&["compare", s(&obj), s(&obj), "--no-hausdorff"]).stdout).unwrap();
+    assert!(text.starts_with("pixels: mean difference 0 levels") && !text.contains("Hausdorff"), "{text}");
+    fails_with(&["compare", s(&obj), s(&lod), "--views", "0"], "views");
 }

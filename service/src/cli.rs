@@ -372,6 +372,10 @@ pub struct SimplifyArgs {
     /// Measure the Hausdorff distance between input and output (certified bounds).
     #[arg(long)]
     pub hausdorff: bool,
+    /// Compare input and output in pixels, as `meshlod compare` does with its default views
+    /// (mean difference, PSNR, silhouette in the report).
+    #[arg(long)]
+    pub compare: bool,
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -426,8 +430,13 @@ impl SimplifyArgs {
             ..defaults
         }
         .with_targets(self.faces.map(|n| n as usize), removed_fraction(self.ratio, self.keep));
-        let options =
-            SimplifyRequest { options, w, compute_hausdorff: self.hausdorff, progressive_lossless: self.pm_lossless };
+        let options = SimplifyRequest {
+            options,
+            w,
+            compute_hausdorff: self.hausdorff,
+            progressive_lossless: self.pm_lossless,
+            compare: self.compare,
+        };
         SimplifyJob {
             input: self.input.clone(),
             output: self.output.clone(),

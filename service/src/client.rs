@@ -188,7 +188,8 @@ impl Executor for Remote {
         // not the file), where a local run says it: after the options' warnings.
         let after = crate::jobs::simplify_warnings(&request).len().min(stats.warnings.len());
         add_input_warnings(&mut stats.warnings, &mesh, after);
-        finish_simplify(job, &out, progressive.as_ref(), pm_file, &stats, response.hausdorff.as_ref())
+        let measured = (response.hausdorff.as_ref(), response.compare.as_ref());
+        finish_simplify(job, &out, progressive.as_ref(), pm_file, &stats, measured)
     }
 
     fn refine(&self, job: &RefineJob) -> Result<RefineReport> {

@@ -179,6 +179,16 @@ fn run_simplify(executor: &dyn Executor, args: &SimplifyArgs) -> Result<()> {
         args.output.display()
     );
     print_hausdorff_line(report.hausdorff.as_ref())?;
+    if let Some(c) = &report.compare {
+        out!(
+            "  pixels: mean difference {} levels of 255, PSNR {}, silhouette {} % ({} views of {} px)",
+            sig(c.pixels_mae),
+            c.pixels_psnr_db.map_or("∞ (the same pictures)".to_string(), |p| format!("{} dB", sig(p))),
+            sig(100.0 * c.pixels_silhouette),
+            c.pixels_views,
+            c.pixels_size
+        );
+    }
     if let (Some(pm), Some(keys)) = (&args.pm, &report.progressive) {
         let materials = if keys.pm_materials_bytes > 0 {
             format!(", {} of them materials and images", keys.pm_materials_bytes)

@@ -435,6 +435,7 @@ impl TryFrom<&proto::SimplifyOptions> for SimplifyRequest {
             w,
             compute_hausdorff: o.compute_hausdorff,
             progressive_lossless: o.progressive_lossless,
+            compare: o.compare,
         })
     }
 }
@@ -529,6 +530,7 @@ impl From<&SimplifyRequest> for proto::SimplifyOptions {
             max_normal_change_degrees: Some(o.max_normal_change_degrees),
             return_progressive: o.record_progressive,
             compute_hausdorff: r.compute_hausdorff,
+            compare: r.compare,
             guard: Some(o.guard),
             distance_term: Some(o.distance_term),
             progressive_lossless: r.progressive_lossless,
@@ -553,6 +555,18 @@ pub fn refusals_to_proto(r: &meshlod_engine::simplify::Refusals) -> proto::Refus
         fold: r.fold as u64,
         seam: r.seam as u64,
         uv_flip: r.uv_flip as u64,
+    }
+}
+
+/// A comparison's figures as the contract reports them.
+pub fn compare_to_proto(r: &meshlod_engine::compare::CompareReport) -> proto::CompareReport {
+    proto::CompareReport {
+        mae: r.mae,
+        psnr: r.psnr,
+        silhouette: r.silhouette,
+        views: r.views as u32,
+        size: r.size as u32,
+        notes: r.notes.clone(),
     }
 }
 
@@ -603,6 +617,7 @@ mod tests {
             guard: Some(2.0),
             attribute_weights: Some(proto::AttributeWeights { uv: 0.3, normal: 0.0, color: 0.1 }),
             compute_hausdorff: true,
+            compare: true,
             prune: true,
             whole: true,
             ..Default::default()

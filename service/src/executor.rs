@@ -105,10 +105,10 @@ pub fn finish_simplify(
     progressive: Option<&ProgressiveMesh>,
     pm_file: Option<&[u8]>,
     stats: &proto::SimplifyStats,
-    measured: Option<&proto::HausdorffReport>,
+    (measured, compared): (Option<&proto::HausdorffReport>, Option<&proto::CompareReport>),
 ) -> Result<SimplifyReport> {
     write_mesh_with(&job.output, mesh, &job.write)?;
-    let mut report = report::simplify(stats, measured);
+    let mut report = report::simplify(stats, measured, compared);
     add_unwritten_warning(&mut report.warnings, &job.output, mesh);
     if let Some(path) = &job.pm {
         let pm = progressive.context("the run returned no progressive mesh")?;
@@ -194,7 +194,8 @@ impl Executor for Local {
         let run =
             crate::jobs::simplify(&mesh, &request, predictor.as_deref(), None).map_err(|e| job_error(e, &job.input))?;
         let progressive = run.result.progressive.as_ref();
-        finish_simplify(job, &run.result.mesh, progressive, None, &run.stats, run.hausdorff.as_ref())
+        let measured = (run.hausdorff.as_ref(), run.compare.as_ref());
+        finish_simplify(job, &run.result.mesh, progressive, None, &run.stats, measured)
     }
 
     fn refine(&self, job: &RefineJob) -> Result<RefineReport> {

@@ -10,6 +10,7 @@
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
+use meshlod_engine::compare::{CompareOptions, compare};
 use meshlod_engine::features::{SHAPE_FEATURE_NAMES, SHAPE_FEATURES, Shape, W_CLASSES, shape_features};
 use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
 use meshlod_engine::refine::{RefineMode, RefineOptions, Refined, refine as engine_refine};
@@ -32,6 +33,8 @@ pub struct Simplification {
     pub stats: proto::SimplifyStats,
     /// The measured distance, when asked for.
     pub hausdorff: Option<proto::HausdorffReport>,
+    /// Input and result compared in pixels, when asked for.
+    pub compare: Option<proto::CompareReport>,
     /// The result as a file, when the request asked for one (`output_format`).
     pub encoded: Option<proto::EncodedMesh>,
     /// Whether the progressive mesh's `.pm` file goes out in the lossless form.
@@ -156,7 +159,21 @@ pub fn simplify(
         },
         boundary: format!("{:?}", options.boundary).to_lowercase(),
     };
-    Ok(Simplification { result, stats, hausdorff, encoded: None, progressive_lossless: r.progressive_lossless })
+    let compare = if r.compare {
+        let options = CompareOptions { hausdorff: false, ..Default::default() };
+        let c = compare(mesh, &result.mesh, &options).map_err(|e| engine_error(e, "options.compare"))?;
+        Some(convert::compare_to_proto(&c.report))
+    } else {
+        None
+    };
+    Ok(Simplification {
+        result,
+        stats,
+        hausdorff,
+        compare,
+        encoded: None,
+        progressive_lossless: r.progressive_lossless,
+    })
 }
 
 /// The refiner's options for a request: the mode inferred where unset, the ETC predicted where

@@ -53,6 +53,31 @@ impl HausdorffKeys {
     }
 }
 
+/// Input and result compared in pixels, as simplify reports it (`--compare`).
+// The fields are the JSON report keys, unit in the name (module doc).
+#[allow(missing_docs)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CompareKeys {
+    pub pixels_mae: f64,
+    pub pixels_psnr_db: Option<f64>,
+    pub pixels_silhouette: f64,
+    pub pixels_views: u32,
+    pub pixels_size: u32,
+}
+
+impl CompareKeys {
+    /// The keys of a comparison.
+    pub fn of(c: &proto::CompareReport) -> CompareKeys {
+        CompareKeys {
+            pixels_mae: c.mae,
+            pixels_psnr_db: c.psnr,
+            pixels_silhouette: c.silhouette,
+            pixels_views: c.views,
+            pixels_size: c.size,
+        }
+    }
+}
+
 /// The refused candidates by rule (they sum to `rejected`), every rule named.
 // The fields are the JSON report keys, unit in the name (module doc).
 #[allow(missing_docs)]
@@ -144,11 +169,18 @@ pub struct SimplifyReport {
     #[serde(flatten)]
     pub hausdorff: Option<HausdorffKeys>,
     #[serde(flatten)]
+    pub compare: Option<CompareKeys>,
+    #[serde(flatten)]
     pub progressive: Option<ProgressiveKeys>,
 }
 
-/// A simplification's report from the contract's figures.
-pub fn simplify(s: &proto::SimplifyStats, measured: Option<&proto::HausdorffReport>) -> SimplifyReport {
+/// A simplification's report from the contract's figures: the run's, and the distance and the
+/// comparison in pixels when they were measured.
+pub fn simplify(
+    s: &proto::SimplifyStats,
+    measured: Option<&proto::HausdorffReport>,
+    compared: Option<&proto::CompareReport>,
+) -> SimplifyReport {
     let w_source = match proto::WSource::try_from(s.w_source) {
         Ok(proto::WSource::Predicted) => "predicted",
         Ok(proto::WSource::Searched) => "searched",
@@ -198,6 +230,7 @@ pub fn simplify(s: &proto::SimplifyStats, measured: Option<&proto::HausdorffRepo
         seconds: s.seconds,
         warnings: s.warnings.clone(),
         hausdorff: measured.map(HausdorffKeys::of),
+        compare: compared.map(CompareKeys::of),
         progressive: None,
     }
 }

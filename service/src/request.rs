@@ -30,6 +30,8 @@ pub struct SimplifyRequest {
     pub compute_hausdorff: bool,
     /// The `.pm` file with every float as it is, rather than the compact form.
     pub progressive_lossless: bool,
+    /// Compare input and result in pixels (`meshlod compare`'s default views).
+    pub compare: bool,
 }
 
 /// How a refinement's ETC (energy threshold coefficient) is chosen.

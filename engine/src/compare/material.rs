@@ -60,13 +60,13 @@ impl Palette {
         let material = c.materials().map_or(NO_MATERIAL, |m| m[3 * f]);
         let paint = self.paints.get(material as usize);
         let mut colour = paint.map_or([1.0; 4], |p| p.factor);
-        if let Some((image, set)) = paint.and_then(|p| p.texture) {
-            if let (Some(Some(image)), Some(uvs)) = (self.images.get(image), &uvs[usize::from(set)]) {
-                let u: f64 = corners.iter().zip(w).map(|(&i, w)| f64::from(uvs[i][0] * w)).sum();
-                let v: f64 = corners.iter().zip(w).map(|(&i, w)| f64::from(uvs[i][1] * w)).sum();
-                let texel = sample(image, u, v);
-                colour = std::array::from_fn(|k| colour[k] * texel[k]);
-            }
+        if let Some((image, set)) = paint.and_then(|p| p.texture)
+            && let (Some(Some(image)), Some(uvs)) = (self.images.get(image), &uvs[usize::from(set)])
+        {
+            let u: f64 = corners.iter().zip(w).map(|(&i, w)| f64::from(uvs[i][0] * w)).sum();
+            let v: f64 = corners.iter().zip(w).map(|(&i, w)| f64::from(uvs[i][1] * w)).sum();
+            let texel = sample(image, u, v);
+            colour = std::array::from_fn(|k| colour[k] * texel[k]);
         }
         if let Some(colors) = c.colors() {
             let vertex = mix(colors);

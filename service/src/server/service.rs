@@ -136,6 +136,7 @@ fn simplify_response(run: jobs::Simplification) -> proto::SimplifyResponse {
         progressive: run.result.progressive.as_ref().map(|pm| progressive_to_proto(pm, run.progressive_lossless)),
         stats: Some(run.stats),
         hausdorff: run.hausdorff,
+        compare: run.compare,
         encoded: run.encoded,
     }
 }
