@@ -12,7 +12,7 @@ use std::sync::atomic::AtomicBool;
 
 use meshlod_engine::compare::{CompareOptions, compare};
 use meshlod_engine::features::{SHAPE_FEATURE_NAMES, SHAPE_FEATURES, Shape, W_CLASSES, shape_features};
-use meshlod_engine::hausdorff::{HausdorffOptions, hausdorff};
+use meshlod_engine::hausdorff::{HausdorffOptions, HausdorffReport, hausdorff};
 use meshlod_engine::refine::{RefineMode, RefineOptions, Refined, refine as engine_refine};
 use meshlod_engine::simplify::{Metric, NormalUpdate, Simplified, SimplifyOptions, simplify as engine_simplify};
 use meshlod_engine::simplify::{prepare, simplify_search_w};
@@ -68,6 +68,32 @@ pub fn lost_attributes(mesh: &Mesh, kept: &[&str], operation: &str) -> Option<St
     })
 }
 
+/// What `r` asks to measure of `result` against its input `mesh`: the certified distance (the one
+/// a search `measured` already, else measured here) and the comparison in pixels.
+fn measure(
+    mesh: &Mesh,
+    result: &Mesh,
+    r: &SimplifyRequest,
+    measured: Option<HausdorffReport>,
+    cancel: Option<Arc<AtomicBool>>,
+) -> Result<(Option<proto::HausdorffReport>, Option<proto::CompareReport>), JobError> {
+    let distance = match (r.compute_hausdorff, measured) {
+        (false, _) => None,
+        (true, Some(d)) => Some(d),
+        (true, None) => {
+            let h = HausdorffOptions { cancel, ..Default::default() };
+            Some(hausdorff(mesh, result, &h).map_err(|e| engine_error(e, "options"))?)
+        }
+    };
+    let pixels = if r.compare {
+        let options = CompareOptions { hausdorff: false, ..Default::default() };
+        Some(compare(mesh, result, &options).map_err(|e| engine_error(e, "options.compare"))?.report)
+    } else {
+        None
+    };
+    Ok((distance.as_ref().map(convert::hausdorff_to_proto), pixels.as_ref().map(convert::compare_to_proto)))
+}
+
 /// Simplifies `mesh` as `r` asks; `WChoice::Auto` asks `predictor`.
 pub fn simplify(
     mesh: &Mesh,
@@ -103,18 +129,7 @@ pub fn simplify(
     } else {
         (engine_simplify(mesh, &options).map_err(|e| engine_error(e, "options"))?, Vec::new(), None)
     };
-    let hausdorff = if r.compute_hausdorff {
-        let d = match measured {
-            Some(d) => d,
-            None => {
-                let h = HausdorffOptions { cancel: options.cancel.clone(), ..Default::default() };
-                hausdorff(mesh, &result.mesh, &h).map_err(|e| engine_error(e, "options"))?
-            }
-        };
-        Some(convert::hausdorff_to_proto(&d))
-    } else {
-        None
-    };
+    let (hausdorff, compare) = measure(mesh, &result.mesh, r, measured, options.cancel.clone())?;
     let s = &result.stats;
     let stats = proto::SimplifyStats {
         faces_in: s.faces_in as u32,
@@ -158,13 +173,6 @@ pub fn simplify(
             NormalUpdate::Recompute => "recompute".into(),
         },
         boundary: format!("{:?}", options.boundary).to_lowercase(),
-    };
-    let compare = if r.compare {
-        let options = CompareOptions { hausdorff: false, ..Default::default() };
-        let c = compare(mesh, &result.mesh, &options).map_err(|e| engine_error(e, "options.compare"))?;
-        Some(convert::compare_to_proto(&c.report))
-    } else {
-        None
     };
     Ok(Simplification {
         result,
