@@ -8,6 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 export MESHLOD_MESHES="${MESHLOD_MESHES:-$(cd .. && pwd)/shared/meshes}"
 export MESHLOD_TEXTURED="${MESHLOD_TEXTURED:-$(cd .. && pwd)/shared/textured}"
+export MESHLOD_GLTF="${MESHLOD_GLTF:-$(cd .. && pwd)/shared/gltf}"
 # Every test skipped for want of data (or of a tool) adds a line here; the run ends by listing them.
 export MESHLOD_SKIP_LOG
 MESHLOD_SKIP_LOG=$(mktemp)
@@ -59,8 +60,9 @@ validate "$gltf_out/lines.glb" "$gltf_out/lines-q.glb"
 # blended values): 0 errors of their own (an error the input has too, such as an image missing from
 # its folder, is reported as inherited).
 if [ -d "$MESHLOD_TEXTURED" ] && [ -f "$MESHLOD_MESHES/spot.obj" ]; then
+  # The flat-shaded shapes too, when the shared glTF assets are there (their own test requires them).
   for input in "$MESHLOD_TEXTURED"/*/*.gltf "$MESHLOD_TEXTURED"/*/*.glb "$MESHLOD_TEXTURED"/*/*.obj \
-    "$MESHLOD_MESHES/spot.obj"; do
+    "$MESHLOD_MESHES/spot.obj" "$MESHLOD_GLTF/flat/ShapeCollection.glb"; do
     [ -f "$input" ] || continue
     name=$(basename "${input%.*}")
     "$MESHLOD" simplify "$input" -o "$gltf_out/$name-10.glb" --ratio 0.9 --pm "$gltf_out/$name.pm" > /dev/null

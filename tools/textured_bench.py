@@ -40,6 +40,7 @@ def faces_of(meshlod, path):
 
 
 def compare(meshlod, reference, lod):
+    """Mean pixel difference and certified Hausdorff distance (None for an emptied result)."""
     r = json.loads(run([meshlod, "compare", reference, lod, "--json"]))
     return r["mae"], r["hausdorff"]
 
@@ -74,9 +75,12 @@ def measure(meshlod, name, path, ratio, tmp):
         gltfpack(path, out, ratio, extra)
         row[key] = faces_of(meshlod, out)
         row[key + "_file"] = out
-    # Equal counts for meshlod and gltfpack -sv: the lower one runs again at the higher count.
+    # Equal counts for meshlod and gltfpack -sv: the lower one runs again at the higher count (not
+    # when gltfpack emptied the mesh: that result is compared as it is).
     ours_at, theirs_at = ours, row["gp_sv_file"]
-    if row["meshlod"] < row["gp_sv"]:
+    if row["gp_sv"] == 0:
+        pass
+    elif row["meshlod"] < row["gp_sv"]:
         ours_at = f"{stem}-meshlod-at.glb"
         run([meshlod, "simplify", path, "-o", ours_at, "--faces", str(row["gp_sv"])])
     elif row["gp_sv"] < row["meshlod"]:
@@ -89,6 +93,10 @@ def measure(meshlod, name, path, ratio, tmp):
     return row
 
 
+def cell(x, digits):
+    return "–" if x is None else f"{x:.{digits}f}"
+
+
 def table(rows, skipped, meshlod):
     lines = [
         "# Textured LODs beside gltfpack, in pixels",
@@ -98,8 +106,10 @@ def table(rows, skipped, meshlod):
         "machine with `" + os.path.relpath(meshlod, ROOT) + "` and gltfpack 1.3.0. Faces: what each reached asked",
         "for the ratio (gltfpack with its default rules, with `-sv`, with `-sp -sv`). Compared at: the",
         "counts meshlod and gltfpack `-sv` were compared at, the one that went lower run again at the",
-        "other's count. Pixels: `meshlod compare` mean difference from the input, 8-bit levels (lower is",
-        "better). Hausdorff: certified upper bound, paper units.",
+        "other's count (not when gltfpack emptied the mesh, 0 faces: that result is compared as it is).",
+        "Pixels: `meshlod compare` mean difference from the input, 8-bit levels (lower is better; an",
+        "emptied result is all silhouette). Hausdorff: certified upper bound, paper units (– for an",
+        "emptied result).",
         "",
         "| asset | ratio | faces in | meshlod | gltfpack | gltfpack -sv | gltfpack -sp -sv | compared at (meshlod / -sv) "
         "| pixels meshlod | pixels -sv | pixels -sp -sv | Hausdorff meshlod | Hausdorff -sv |",
@@ -109,17 +119,21 @@ def table(rows, skipped, meshlod):
         lines.append(
             f"| {r['asset']} | {r['ratio']} | {r['faces_in']} | {r['meshlod']} | {r['gp']} | {r['gp_sv']} | {r['gp_sp']} "
             f"| {r['at'][0]} / {r['at'][1]} | {r['pixels'][0]:.2f} | {r['pixels'][1]:.2f} | {r['pixels_sp']:.2f} "
-            f"| {r['hausdorff'][0]:.4f} | {r['hausdorff'][1]:.4f} |")
+            f"| {cell(r['hausdorff'][0], 4)} | {cell(r['hausdorff'][1], 4)} |")
     at_10 = [r for r in rows if r["ratio"] == 0.1]
-    if at_10:
-        geo = lambda xs: math.exp(sum(math.log(max(x, 1e-12)) for x in xs) / len(xs))
+    # The distances' geometric mean over the assets both simplified (a distance above 0 each).
+    both = [r for r in at_10 if all(h is not None and h > 0 for h in r["hausdorff"])]
+    if at_10 and both:
+        geo = lambda xs: math.exp(sum(math.log(x) for x in xs) / len(xs))
         lines += [
             "",
             "At 10%, over the " + str(len(at_10)) + " assets: meshlod's pixels at or below gltfpack -sv's on "
             + str(sum(r["pixels"][0] <= r["pixels"][1] for r in at_10)) + "; geometric mean of the certified "
-            f"Hausdorff distance {geo([r['hausdorff'][0] for r in at_10]):.4f} (meshlod) against "
-            f"{geo([r['hausdorff'][1] for r in at_10]):.4f} (gltfpack -sv); meshlod within 2% of gltfpack's "
-            "default count, or lower, on " + str(sum(r["meshlod"] <= 1.02 * r["gp"] for r in at_10)) + ".",
+            f"Hausdorff distance over the {len(both)} that both simplified: "
+            f"{geo([r['hausdorff'][0] for r in both]):.4f} (meshlod) against "
+            f"{geo([r['hausdorff'][1] for r in both]):.4f} (gltfpack -sv); meshlod within 2% of gltfpack's "
+            "default count, or lower, on " + str(sum(r["meshlod"] <= 1.02 * r["gp"] for r in at_10))
+            + " (gltfpack emptied " + str(sum(r["gp"] == 0 for r in at_10)) + ").",
         ]
     if skipped:
         lines += ["", "Not measured (meshlod or gltfpack refused them):", ""]

@@ -92,6 +92,21 @@ pub fn require_shared_textured(test: &str) -> Option<PathBuf> {
     require(test, shared_textured_dir(), "textured assets", TEXTURED_ENV)
 }
 
+/// Environment variable naming the shared glTF assets directory.
+pub const GLTF_ENV: &str = "MESHLOD_GLTF";
+
+/// The shared glTF assets (extensions, two texture coordinate sets, compressed and flat-shaded
+/// files; `MANIFEST.tsv` inside), if present: `$MESHLOD_GLTF`, else `gltf/` beside the shared
+/// meshes, else `../shared/gltf`.
+pub fn shared_gltf_dir() -> Option<PathBuf> {
+    shared_manifest_dir(GLTF_ENV, "gltf")
+}
+
+/// [`require_shared_meshes`] for the glTF assets.
+pub fn require_shared_gltf(test: &str) -> Option<PathBuf> {
+    require(test, shared_gltf_dir(), "glTF assets", GLTF_ENV)
+}
+
 /// Environment variable naming the shared corpus directory (binary PLY, `MANIFEST.tsv` inside).
 pub const CORPUS_ENV: &str = "MESHLOD_CORPUS";
 

@@ -74,10 +74,10 @@ fn bad_options_and_empty_meshes_are_refused_by_name() {
     assert!(e.contains("size"), "{e}");
     let e = compare(&Mesh::default(), &mesh, &CompareOptions::default()).unwrap_err().to_string();
     assert!(e.contains("no faces"), "{e}");
-    // An empty B is all silhouette.
-    let report =
-        compare(&mesh, &Mesh::default(), &CompareOptions { hausdorff: false, ..Default::default() }).unwrap().report;
-    assert_eq!(report.silhouette, 1.0);
+    // An empty B is all silhouette, and has no distance (said).
+    let report = compare(&mesh, &Mesh::default(), &CompareOptions::default()).unwrap().report;
+    assert_eq!((report.silhouette, report.hausdorff), (1.0, None));
+    assert!(report.notes.iter().any(|n| n.contains("no faces")), "{:?}", report.notes);
 }
 
 #[test]

@@ -497,3 +497,59 @@ fn distance_guard_levels_equal_straight_runs_and_bad_weights_are_refused() {
         assert!(matches!(r, Err(MeshError::InvalidParameter { name: "guard", .. })), "guard {guard} {metric:?}: {r:?}");
     }
 }
+
+/// A flat-shaded mesh (every corner's normal its face's own, as low-poly art and many glTF exports
+/// are) simplifies to its target like a mesh without normals, and stays flat-shaded; a mesh with
+/// smooth normals keeps them as values.
+#[test]
+fn flat_shaded_meshes_simplify_and_stay_flat() {
+    use meshlod_engine::simplify::{SimplifyOptions, simplify};
+    let mut mesh = meshlod_engine::procedural::icosphere(3);
+    let flat: Vec<[f32; 3]> =
+        (0..mesh.face_count()).flat_map(|f| [mesh.face_area_vector(f).normalize().as_vec3().to_array(); 3]).collect();
+    mesh.corners.set_normals(Some(flat));
+    assert!(meshlod_engine::validate::validate(&mesh).seam_edges > 0, "every edge a normal seam");
+    let options = SimplifyOptions { target_ratio: Some(0.75), record_progressive: true, ..Default::default() };
+    let out = simplify(&mesh, &options).unwrap();
+    let target = mesh.face_count() / 4;
+    assert!(out.mesh.face_count() <= target + target / 50, "{} faces for {target}", out.mesh.face_count());
+    assert!(out.stats.flat_normals, "said");
+    let normals = out.mesh.corners.normals().expect("the result has normals");
+    for f in 0..out.mesh.face_count() {
+        let face = out.mesh.face_area_vector(f).normalize();
+        for n in &normals[3 * f..3 * f + 3] {
+            let angle = face.dot(glam::DVec3::from(n.map(f64::from))).clamp(-1.0, 1.0).acos().to_degrees();
+            assert!(angle < 1.0, "face {f}: a corner normal {angle}° off its face's");
+        }
+    }
+    let pm = out.progressive.unwrap();
+    assert!(pm.at_level(0).corners.normals().is_none(), "the progressive mesh leaves flat normals out");
+    assert_eq!(pm.at_level(pm.levels()).face_count(), mesh.face_count());
+    // Smooth normals (the sphere's own) are values: kept, not recomputed.
+    let mut smooth = meshlod_engine::procedural::icosphere(3);
+    let radial: Vec<[f32; 3]> =
+        smooth.triangles.iter().flatten().map(|&v| smooth.point(v).normalize().as_vec3().to_array()).collect();
+    smooth.corners.set_normals(Some(radial.clone()));
+    let out = simplify(&smooth, &options).unwrap();
+    assert!(!out.stats.flat_normals);
+    assert!(out.mesh.corners.normals().unwrap().iter().all(|n| radial.contains(n)), "the input's normals");
+}
+
+/// The shared flat-shaded shapes (a torus, spheres, a cone, boxes; every edge a normal seam)
+/// reach 10% of their faces and stay flat.
+#[test]
+fn the_shared_flat_shaded_shapes_reach_their_target() {
+    use meshlod_engine::simplify::{SimplifyOptions, simplify};
+    let Some(dir) = meshlod_engine::datasets::require_shared_gltf("flat_shaded_shapes") else { return };
+    let mesh = meshlod_engine::io::read_mesh(dir.join("flat/ShapeCollection.glb")).unwrap();
+    let out = simplify(&mesh, &SimplifyOptions { target_ratio: Some(0.9), ..Default::default() }).unwrap();
+    let target = mesh.face_count() / 10;
+    assert!(out.mesh.face_count() <= target + target / 50, "{} faces for {target}", out.mesh.face_count());
+    assert!(out.stats.flat_normals);
+    let normals = out.mesh.corners.normals().unwrap();
+    for f in 0..out.mesh.face_count() {
+        let face = out.mesh.face_area_vector(f).normalize();
+        assert!(normals[3 * f..3 * f + 3].iter().all(|n| face.dot(glam::DVec3::from(n.map(f64::from))) > 0.9998));
+    }
+    assert!(meshlod_engine::validate::validate(&out.mesh).is_manifold_oriented);
+}

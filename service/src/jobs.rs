@@ -150,6 +150,11 @@ pub fn simplify(
         warnings: simplify_warnings(r)
             .into_iter()
             .chain(mesh.corners.input_warnings())
+            .chain((options.record_progressive && s.flat_normals).then(|| {
+                "the input is flat-shaded: the result has its faces' normals, the progressive mesh none \
+                 (a glTF viewer draws a mesh without normals flat)"
+                    .to_string()
+            }))
             .chain((options.record_progressive && s.back_faces > 0).then(|| {
                 format!(
                     "{} back faces (a double-sided sheet modelled with two faces): the result has both sides, \
@@ -167,6 +172,7 @@ pub fn simplify(
         dropped_duplicate_faces: s.dropped_duplicate_faces as u32,
         back_faces: s.back_faces as u32,
         halves: s.halves,
+        flat_normals: s.flat_normals,
         placement: format!("{:?}", result.stats.placement).to_lowercase(),
         normals: match options.normals {
             NormalUpdate::Linear => "linear".into(),

@@ -76,7 +76,8 @@ pub struct CompareReport {
     pub psnr: Option<f64>,
     /// Share of those pixels that only one of the two covers.
     pub silhouette: f64,
-    /// Certified symmetric Hausdorff distance (upper bound), paper units of A, when measured.
+    /// Certified symmetric Hausdorff distance (upper bound), paper units of A, when measured (not
+    /// for a B without faces).
     pub hausdorff: Option<f64>,
     /// Its lower bound (a distance reached), paper units.
     pub hausdorff_lower: Option<f64>,
@@ -146,8 +147,13 @@ pub fn compare(a: &Mesh, b: &Mesh, options: &CompareOptions) -> Result<Compariso
     }
     let share = |x: f64| if union == 0 { 0.0 } else { x / union as f64 };
     let mse = share(squares);
-    let distance = if options.hausdorff { Some(hausdorff(a, b, &HausdorffOptions::default())?) } else { None };
+    // An empty B (a simplifier that threw the model away) is all silhouette, and has no distance.
+    let measured = options.hausdorff && b.face_count() > 0;
+    let distance = if measured { Some(hausdorff(a, b, &HausdorffOptions::default())?) } else { None };
     let mut notes: Vec<String> = palettes[0].notes.iter().map(|n| format!("A: {n}")).collect();
+    if options.hausdorff && !measured {
+        notes.push("B has no faces: no distance to measure".into());
+    }
     notes.extend(palettes[1].notes.iter().map(|n| format!("B: {n}")));
     let report = CompareReport {
         mae: share(sum),

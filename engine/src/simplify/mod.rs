@@ -137,6 +137,7 @@ mod candidate;
 mod classify;
 mod cost;
 mod fan_term;
+mod flat;
 mod guard;
 mod halves;
 pub(crate) mod kernel;

@@ -287,6 +287,10 @@ pub struct SimplifyStats {
     /// [`super::FAN_TERM_FROM`] of the input's faces is gone, so a run that stops before that never
     /// pays it.
     pub distance_term: f64,
+    /// Whether the input was flat-shaded (every corner's normal its face's own): the run went
+    /// without its normals, the result has its faces' normals, and the progressive mesh none (glTF
+    /// draws a mesh without normals flat).
+    pub flat_normals: bool,
     /// Wall time in seconds.
     pub seconds: f64,
 }

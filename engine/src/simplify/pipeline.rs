@@ -7,7 +7,7 @@ use std::time::Instant;
 use super::halves;
 use super::kernel::State;
 use super::options::{Metric, Outcome, Placement, Simplified, SimplifyOptions, SimplifyStats};
-use super::{classify, guard, prune, run, sheets};
+use super::{classify, flat, guard, prune, run, sheets};
 use crate::error::MeshError;
 use crate::mesh::{DistanceUnits, Mesh};
 use crate::pm::ProgressiveMesh;
@@ -18,6 +18,15 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     // 1. Options and input.
     options.validate()?;
     mesh.check()?;
+    // A flat-shaded mesh goes without its normals, and gets its faces' again at the end (`flat`).
+    let flat_normals = flat::is_flat_shaded(mesh);
+    let unshaded;
+    let mesh = if flat_normals {
+        unshaded = flat::without_normals(mesh);
+        &unshaded
+    } else {
+        mesh
+    };
     let (prepared, input_vertex, dropped) = classify::prepare_in_place(mesh);
     if prepared.triangles.is_empty() {
         return Err(MeshError::Empty { what: "no faces" });
@@ -47,10 +56,13 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
     } else {
         None
     };
-    let out = match halved {
+    let mut out = match halved {
         Some(out) => out,
         None => one_sequence(&prepared, &input_vertex, options, &units, target)?,
     };
+    if flat_normals {
+        flat::with_flat_normals(&mut out.mesh);
+    }
     let stats = SimplifyStats {
         faces_in,
         faces_out: out.mesh.face_count(),
@@ -71,6 +83,7 @@ pub fn simplify(mesh: &Mesh, options: &SimplifyOptions) -> Result<Simplified, Me
         back_faces: out.back_faces,
         halves: out.halves,
         distance_term: out.distance_term,
+        flat_normals,
         seconds: started.elapsed().as_secs_f64(),
     };
     Ok(Simplified { mesh: out.mesh, progressive: out.progressive, stats })
