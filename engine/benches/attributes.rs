@@ -180,7 +180,8 @@ fn main() {
             format!("| {name} | {} | {:.2} | {:.2} |", out.mesh.face_count(), error(&out.mesh) / e_theirs, time)
         };
         // The attribute quadrics on (`--attribute-weights uv=0.3`).
-        let (term, term_time, a_term) = variant(&SimplifyOptions { attribute_weights: WEIGHTED, ..options.clone() });
+        let (term, term_time, a_term) =
+            variant(&SimplifyOptions { attribute_weights: Some(WEIGHTED), ..options.clone() });
         term_rows.push(format!(
             "{} {} / {} | {} / {} |",
             lead(&term, term_time),

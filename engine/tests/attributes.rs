@@ -695,7 +695,11 @@ fn attribute_quadrics_are_off_by_default_and_lower_the_texture_error_on_spot() {
     };
     let mesh = read_mesh(spot).unwrap();
     let run = |attribute_weights| {
-        let options = SimplifyOptions { target_ratio: Some(0.9), attribute_weights, ..Default::default() };
+        let options = SimplifyOptions {
+            target_ratio: Some(0.9),
+            attribute_weights: Some(attribute_weights),
+            ..Default::default()
+        };
         simplify(&mesh, &options).unwrap()
     };
     let off = run(AttributeWeights::default());
@@ -711,7 +715,7 @@ fn attribute_quadrics_are_off_by_default_and_lower_the_texture_error_on_spot() {
     assert!(after < 0.85 * before, "texture error {before:.2} → {after:.2} texels");
     // Out of range: refused by name.
     let bad = SimplifyOptions {
-        attribute_weights: AttributeWeights { normal: -1.0, ..Default::default() },
+        attribute_weights: Some(AttributeWeights { normal: -1.0, ..Default::default() }),
         ..Default::default()
     };
     match simplify(&mesh, &bad) {

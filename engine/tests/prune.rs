@@ -101,13 +101,16 @@ fn prune_with_a_progressive_mesh_is_refused_naming_the_option() {
 
 /// Lantern at 860 faces (where its anchors stop a run asked for 10%): its eight chain links and
 /// other small parts held faces that its beam and pole need. With prune its position error drops
-/// and every attribute is kept.
+/// and every attribute is kept. (Without the attribute quadrics: with the default normal weight
+/// the run's error reaches the size of a larger part sooner, prune takes it, and the distance
+/// stays where it was without prune.)
 #[test]
 fn pruning_lantern_gives_its_faces_to_the_large_shapes() {
     let Some(dir) = meshlod_engine::datasets::require_shared_textured("pruning_lantern") else { return };
     let mesh = read_mesh(dir.join("draco__Lantern/Lantern.gltf")).expect("reads");
-    let kept = simplify(&mesh, &to(860, false)).expect("simplifies");
-    let pruned = simplify(&mesh, &to(860, true)).expect("simplifies");
+    let off = |prune| SimplifyOptions { attribute_weights: Some(Default::default()), ..to(860, prune) };
+    let kept = simplify(&mesh, &off(false)).expect("simplifies");
+    let pruned = simplify(&mesh, &off(true)).expect("simplifies");
     assert!(pruned.stats.parts_removed > 0, "{:?}", pruned.stats);
     assert_eq!(pruned.mesh.corners.names(), mesh.corners.names());
     let report = validate(&pruned.mesh);

@@ -337,8 +337,9 @@ pub struct SimplifyArgs {
     /// Keep every vertex of a texture, normal, colour or material seam in place.
     #[arg(long)]
     pub lock_seams: bool,
-    /// Weights of the attribute quadrics in the cost, e.g. `uv=0.3` (each ≥ 0; unset ones 0;
-    /// off by default: docs/attributes-report.md has what it does and costs).
+    /// Weights of the attribute quadrics in the cost, e.g. `uv=0.3` (each ≥ 0; unset ones 0; all
+    /// 0 turns them off). Default: `normal=0.0001` for a mesh with texture coordinates (normals
+    /// charged a little, which the pixels favour: docs/textured-report.md), none for the others.
     #[arg(long, value_name = "uv=W,normal=W,color=W", value_parser = parse_attribute_weights)]
     pub attribute_weights: Option<proto::AttributeWeights>,
     /// Take out whole parts (faces joined through shared vertices: chain links, bolts) once the
@@ -420,7 +421,7 @@ impl SimplifyArgs {
             record_progressive: self.pm.is_some(),
             guard: self.guard.unwrap_or(defaults.guard),
             distance_term: self.distance_term.unwrap_or(defaults.distance_term),
-            attribute_weights: self.attribute_weights.map_or(defaults.attribute_weights, |w| AttributeWeights {
+            attribute_weights: self.attribute_weights.map(|w| AttributeWeights {
                 uv: w.uv,
                 normal: w.normal,
                 color: w.color,

@@ -405,8 +405,10 @@ impl TryFrom<&proto::SimplifyOptions> for SimplifyOptions {
             guard: o.guard.unwrap_or(defaults.guard),
             distance_term: o.distance_term.unwrap_or(defaults.distance_term),
             lock_seams: o.lock_seams,
-            attribute_weights: o.attribute_weights.as_ref().map_or(defaults.attribute_weights, |w| {
-                meshlod_engine::simplify::AttributeWeights { uv: w.uv, normal: w.normal, color: w.color }
+            attribute_weights: o.attribute_weights.as_ref().map(|w| meshlod_engine::simplify::AttributeWeights {
+                uv: w.uv,
+                normal: w.normal,
+                color: w.color,
             }),
             prune: o.prune,
             halves: !o.whole,
@@ -534,11 +536,7 @@ impl From<&SimplifyRequest> for proto::SimplifyOptions {
             guard: Some(o.guard),
             distance_term: Some(o.distance_term),
             progressive_lossless: r.progressive_lossless,
-            attribute_weights: (weights != Default::default()).then_some(proto::AttributeWeights {
-                uv: weights.uv,
-                normal: weights.normal,
-                color: weights.color,
-            }),
+            attribute_weights: weights.map(|w| proto::AttributeWeights { uv: w.uv, normal: w.normal, color: w.color }),
             prune: o.prune,
             whole: !o.halves,
         }

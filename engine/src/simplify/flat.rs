@@ -40,13 +40,16 @@ pub(super) fn without_normals(mesh: &Mesh) -> Mesh {
 }
 
 /// Gives every corner its face's unit normal (a face without area: +z, so that every normal is a
-/// unit vector).
+/// unit vector). Each component is rounded to a multiple of 2⁻²⁰ (and −0 made +0), so that
+/// coplanar faces, whose computed normals differ in their last bits, get the same one and no seam
+/// between them.
 pub(super) fn with_flat_normals(mesh: &mut Mesh) {
+    const STEP: f64 = (1u64 << 20) as f64;
     let normals = (0..mesh.face_count())
         .flat_map(|f| {
             let n = mesh.face_area_vector(f).normalize_or_zero();
             let n = if n == glam::DVec3::ZERO { glam::DVec3::Z } else { n };
-            [n.as_vec3().to_array(); 3]
+            [n.to_array().map(|c| ((c * STEP).round() / STEP + 0.0) as f32); 3]
         })
         .collect();
     mesh.corners.set_normals(Some(normals));

@@ -226,8 +226,8 @@ mod tests {
         mesh.corners.set_normals(Some(normals.collect()));
         let weights = AttributeWeights { uv: 0.0, normal: 1.0, color: 0.0 };
         for (name, options) in [
-            ("fan-distance term", SimplifyOptions { attribute_weights: weights, ..Default::default() }),
-            ("distance guard", SimplifyOptions { attribute_weights: weights, guard: 1.0, ..Default::default() }),
+            ("fan-distance term", SimplifyOptions { attribute_weights: Some(weights), ..Default::default() }),
+            ("distance guard", SimplifyOptions { attribute_weights: Some(weights), guard: 1.0, ..Default::default() }),
         ] {
             let (mut state, edges) = State::new(&mesh, &options);
             state.carry_attributes(&mesh);

@@ -246,7 +246,7 @@ impl<'o> State<'o> {
             }
         }
         let diagonal2 = mesh.bounds().map_or(0.0, |b| b.diagonal().powi(2));
-        let w = self.config.options.attribute_weights;
+        let w = self.config.options.attribute_weights_for(mesh);
         self.terms.wedges =
             WedgeQuadrics::new(mesh, &self.seams.value_id, [w.uv, w.normal, w.color].map(|w| w * diagonal2));
         // (A survivor keeps its flag: a seam vertex goes only into one on the same seam.)

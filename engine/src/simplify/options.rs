@@ -110,6 +110,15 @@ pub struct AttributeWeights {
 }
 
 impl AttributeWeights {
+    /// The weights a mesh with texture coordinates gets when none are given: normals charged a
+    /// little (a mesh without normals pays nothing). Across the shared textured assets at 50, 25
+    /// and 10% this lowered the mean pixel difference from the input (`meshlod compare`, geometric
+    /// mean 7.95 → 5.62 levels) for a certified Hausdorff distance 15% higher (0.0183 → 0.0210);
+    /// weights 10 to 1000 times larger raised the distance more and the pixels gained less, 10
+    /// times smaller gained less, texture coordinate weights added nothing. A mesh without
+    /// texture coordinates (a scan, a CAD part: judged by its surface) gets none.
+    pub const TEXTURED: AttributeWeights = AttributeWeights { uv: 0.0, normal: 1e-4, color: 0.0 };
+
     /// Whether the term is off.
     pub fn is_off(&self) -> bool {
         self.uv == 0.0 && self.normal == 0.0 && self.color == 0.0
@@ -161,9 +170,11 @@ pub struct SimplifyOptions {
     pub lock_seams: bool,
     /// Weights of the attribute quadrics in the cost (texture coordinates, normals, colours): per
     /// wedge, how far the values a collapse leaves at the merged vertex are from what the faces
-    /// it has taken in gave there (`attribute_quadric`). All 0, the default, turns them off;
-    /// measured in docs/attributes-report.md.
-    pub attribute_weights: AttributeWeights,
+    /// it has taken in gave there (`attribute_quadric`). `None`, the default: [`AttributeWeights::
+    /// TEXTURED`] for a mesh with texture coordinates, off for the others
+    /// ([`SimplifyOptions::attribute_weights_for`]); all 0 turns them off. Measured in
+    /// docs/attributes-report.md and docs/textured-report.md.
+    pub attribute_weights: Option<AttributeWeights>,
     /// Take out whole parts (faces joined through shared vertices: chain links, bolts, a tree's
     /// far leaves) once the run's largest collapse error reaches their size, so that the faces
     /// they would keep go to the larger shapes, as meshoptimizer's `SimplifyPrune` does. A part's
@@ -204,7 +215,7 @@ impl Default for SimplifyOptions {
             guard: 0.0,
             distance_term: DEFAULT_DISTANCE_TERM,
             lock_seams: false,
-            attribute_weights: AttributeWeights::default(),
+            attribute_weights: None,
             prune: false,
             halves: true,
             cancel: None,
@@ -317,6 +328,18 @@ pub const DEFAULT_MAX_NORMAL_CHANGE_DEGREES: f64 = 90.0;
 pub const DEFAULT_DISTANCE_TERM: f64 = 1.0;
 
 impl SimplifyOptions {
+    /// The attribute weights that apply to `mesh`: those given, else [`AttributeWeights::TEXTURED`]
+    /// for a mesh with texture coordinates and none for the others.
+    pub fn attribute_weights_for(&self, mesh: &Mesh) -> AttributeWeights {
+        self.attribute_weights.unwrap_or(if mesh.corners.uvs().is_some() {
+            AttributeWeights::TEXTURED
+        } else {
+            AttributeWeights::default()
+        })
+    }
+}
+
+impl SimplifyOptions {
     /// Checks every option on its own and against the others; errors name the field.
     pub fn validate(&self) -> Result<(), MeshError> {
         if let Some(r) = self.target_ratio
@@ -364,7 +387,7 @@ impl SimplifyOptions {
                     .into(),
             });
         }
-        let a = self.attribute_weights;
+        let a = self.attribute_weights.unwrap_or_default();
         for (name, w) in [
             ("attribute_weights.uv", a.uv),
             ("attribute_weights.normal", a.normal),
