@@ -768,3 +768,33 @@ fn gltf_custom_attributes_and_primitives_without_positions_are_read_and_said() {
     let e = read_gltf(&json.replace(r#","min":[0,0,0],"max":[1,1,0]"#, ""), "tiles.gltf").unwrap_err().to_string();
     assert!(e.contains("POSITION") && e.contains("min"), "{e}");
 }
+
+/// A file may name one accessor under many application-specific names: the first
+/// `MAX_EXTRA_CHANNELS` (16) become channels, the others are said and left out, so that a few
+/// bytes cannot ask for a value per corner times thousands.
+#[test]
+fn gltf_further_attributes_beyond_sixteen_are_said_and_left_out() {
+    let mut bin = Vec::new();
+    for c in [0f32, 0., 0., 1., 0., 0., 0., 1., 0., 7., 7., 7.] {
+        bin.extend_from_slice(&c.to_le_bytes());
+    }
+    let names: Vec<String> = (0..20).map(|i| format!(r#""_A{i:02}":1"#)).collect();
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":{},"uri":"{}"}}],
+        "bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":12}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                     {{"bufferView":1,"componentType":5126,"count":3,"type":"SCALAR"}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,{}}}}}]}}]}}"#,
+        bin.len(),
+        data_uri(&bin),
+        names.join(",")
+    );
+    let mesh = read_gltf(&json, "many.gltf").unwrap();
+    let custom = mesh.corners.names().into_iter().filter(|n| n.starts_with("_A")).count();
+    assert_eq!(custom, 16, "{:?}", mesh.corners.names());
+    let warning = mesh.corners.not_carried_warning().expect("said");
+    assert!(
+        warning.contains("_A16 values") && warning.contains("_A19 values") && !warning.contains("_A15"),
+        "{warning}"
+    );
+}

@@ -120,7 +120,15 @@ pub fn compare(a: &Mesh, b: &Mesh, options: &CompareOptions) -> Result<Compariso
         name: "a",
         reason: "the first mesh has no faces of any extent to look at".into(),
     })?;
-    let palettes = [Palette::of(a.corners.library.as_deref()), Palette::of(b.corners.library.as_deref())];
+    // A LOD made here shares its input's library: its images are decoded once.
+    let first = Palette::of(a.corners.library.as_deref());
+    let shared = match (&a.corners.library, &b.corners.library) {
+        (Some(x), Some(y)) => std::sync::Arc::ptr_eq(x, y),
+        (None, None) => true,
+        _ => false,
+    };
+    let second = if shared { first.clone() } else { Palette::of(b.corners.library.as_deref()) };
+    let palettes = [first, second];
     let views = View::spread(options.views);
     let pairs: Vec<Pair> = views
         .par_iter()

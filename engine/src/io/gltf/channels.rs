@@ -6,6 +6,11 @@
 use super::accessor::{any_floats, same_count};
 use crate::mesh::{Channel, MaterialLibrary, Semantic, Values};
 
+/// Most further attributes a primitive's channels take (in the order the file lists them; the
+/// others are said and left out): each is a value per corner, and a file may name one accessor
+/// under many names, so that a few bytes would ask for gigabytes.
+pub(crate) const MAX_EXTRA_CHANNELS: usize = 16;
+
 /// The channel an attribute beyond the ones the engine gives a meaning to is read into: a third
 /// or later TEXCOORD_n, a second or later COLOR_n, or an application-specific attribute (`_NAME`,
 /// such as `_FEATURE_ID_0`) of one to four components; `None` for the others.
@@ -35,6 +40,9 @@ where
     let mut out = Vec::new();
     for (semantic, accessor) in primitive.attributes() {
         let Some(channel) = extra_channel(&semantic, &accessor) else { continue };
+        if out.len() == MAX_EXTRA_CHANNELS {
+            break;
+        }
         let name = semantic.to_string();
         let values = match (&channel, accessor.dimensions().multiplicity()) {
             (Semantic::Color(k), _) => Values::F4(

@@ -27,7 +27,7 @@ use glam::{DMat3, DMat4, DVec3};
 use gltf::mesh::Mode;
 
 use super::accessor::{finite, quantized, same_count};
-use super::channels::{extra_channel, extra_channels, merge_extra};
+use super::channels::{MAX_EXTRA_CHANNELS, extra_channel, extra_channels, merge_extra};
 use super::checks;
 use crate::error::MeshError;
 use crate::io::options::ReadLimits;
@@ -363,28 +363,8 @@ fn library(
             not_carried.push(what);
         }
     };
-    for mesh in document.meshes() {
-        for primitive in mesh.primitives() {
-            if !drawn(&primitive) {
-                note("primitives without POSITION (drawn by nothing)".into());
-            }
-            if primitive.morph_targets().next().is_some() {
-                note("morph targets".into());
-            }
-            for (semantic, accessor) in primitive.attributes() {
-                let name = semantic.to_string();
-                let skin = matches!(name.as_str(), "JOINTS_0" | "WEIGHTS_0") && rig.is_some();
-                if !skin
-                    && extra_channel(&semantic, &accessor).is_none()
-                    && !matches!(
-                        name.as_str(),
-                        "POSITION" | "NORMAL" | "TANGENT" | "TEXCOORD_0" | "TEXCOORD_1" | "COLOR_0"
-                    )
-                {
-                    note(format!("{name} values"));
-                }
-            }
-        }
+    for primitive in document.meshes().flat_map(|m| m.primitives()) {
+        primitive_notes(&primitive, rig.is_some(), &mut note);
     }
     if rig.is_none() && document.skins().next().is_some() {
         note(rig_refused.unwrap_or_else(|| "skins (the meshes are not all drawn with one skin)".into()));
@@ -407,6 +387,32 @@ fn library(
 }
 
 /// The document's JSON as a value.
+/// Says (through `note`) what of `primitive` a mesh does not carry: its morph targets, the
+/// attributes read neither as the engine's own nor as channels (joints and weights carried when
+/// the asset is `skinned`), and that it draws nothing without POSITION.
+fn primitive_notes(primitive: &gltf::Primitive, skinned: bool, note: &mut impl FnMut(String)) {
+    if !drawn(primitive) {
+        note("primitives without POSITION (drawn by nothing)".into());
+    }
+    if primitive.morph_targets().next().is_some() {
+        note("morph targets".into());
+    }
+    let mut extras = 0;
+    for (semantic, accessor) in primitive.attributes() {
+        let name = semantic.to_string();
+        let skin = matches!(name.as_str(), "JOINTS_0" | "WEIGHTS_0") && skinned;
+        // The further attributes read as channels, the first MAX_EXTRA_CHANNELS of them.
+        let carried = extra_channel(&semantic, &accessor).is_some() && {
+            extras += 1;
+            extras <= MAX_EXTRA_CHANNELS
+        };
+        let own = matches!(name.as_str(), "POSITION" | "NORMAL" | "TANGENT" | "TEXCOORD_0" | "TEXCOORD_1" | "COLOR_0");
+        if !(skin || carried || own) {
+            note(format!("{name} values"));
+        }
+    }
+}
+
 fn raw_json(json: &[u8]) -> Result<serde_json::Value, String> {
     serde_json::from_slice(json).map_err(|e| e.to_string())
 }
