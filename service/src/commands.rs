@@ -180,14 +180,8 @@ fn run_simplify(executor: &dyn Executor, args: &SimplifyArgs) -> Result<()> {
     );
     print_hausdorff_line(report.hausdorff.as_ref())?;
     if let Some(c) = &report.compare {
-        out!(
-            "  pixels: mean difference {} levels of 255, PSNR {}, silhouette {} % ({} views of {} px)",
-            sig(c.pixels_mae),
-            c.pixels_psnr_db.map_or("∞ (the same pictures)".to_string(), |p| format!("{} dB", sig(p))),
-            sig(100.0 * c.pixels_silhouette),
-            c.pixels_views,
-            c.pixels_size
-        );
+        let (views, size) = (c.pixels_views as usize, c.pixels_size as usize);
+        out!("  {}", pixels_line(c.pixels_mae, c.pixels_psnr_db, c.pixels_silhouette, views, size));
     }
     if let (Some(pm), Some(keys)) = (&args.pm, &report.progressive) {
         let materials = if keys.pm_materials_bytes > 0 {
@@ -350,18 +344,20 @@ fn compare_files(a: &Path, b: &Path, args: &CompareArgs, json: bool) -> Result<(
     print_compare(r)
 }
 
+/// A comparison's pixel figures as one line of text.
+fn pixels_line(mae: f64, psnr: Option<f64>, silhouette: f64, views: usize, size: usize) -> String {
+    format!(
+        "pixels: mean difference {} levels of 255, PSNR {}, silhouette {} % ({views} views of {size} px)",
+        sig(mae),
+        psnr.map_or("∞ (the same pictures)".to_string(), |p| format!("{} dB", sig(p))),
+        sig(100.0 * silhouette),
+    )
+}
+
 /// The figures of a comparison in text.
 pub(crate) fn print_compare(r: &CompareReport) -> Result<()> {
-    out!(
-        "pixels: mean difference {} levels of 255, PSNR {}, silhouette {} % ({} views of {} px; {} faces against {})",
-        sig(r.mae),
-        r.psnr.map_or("∞ (the same pictures)".to_string(), |p| format!("{} dB", sig(p))),
-        sig(100.0 * r.silhouette),
-        r.views,
-        r.size,
-        r.faces_b,
-        r.faces_a
-    );
+    let line = pixels_line(r.mae, r.psnr, r.silhouette, r.views, r.size);
+    out!("{line}; {} faces against {}", r.faces_b, r.faces_a);
     if let (Some(upper), Some(lower), Some(pct)) = (r.hausdorff, r.hausdorff_lower, r.hausdorff_diag_pct) {
         out!("Hausdorff ≤ {} paper units (≥ {}, certified; {} % of the diagonal)", sig(upper), sig(lower), sig(pct));
     }
