@@ -87,8 +87,10 @@ def measure(meshlod, name, path, ratio, tmp):
         theirs_at = f"{stem}-gp_sv-at.glb"
         gltfpack(path, theirs_at, row["meshlod"] / faces_in, ["-sv"])
     row["at"] = (faces_of(meshlod, ours_at), faces_of(meshlod, theirs_at))
-    row["pixels"] = (compare(meshlod, path, ours_at)[0], compare(meshlod, path, theirs_at)[0])
-    row["hausdorff"] = (compare(meshlod, path, ours_at)[1], compare(meshlod, path, theirs_at)[1])
+    (ours_pixels, ours_distance), (theirs_pixels, theirs_distance) = (
+        compare(meshlod, path, ours_at), compare(meshlod, path, theirs_at))
+    row["pixels"] = (ours_pixels, theirs_pixels)
+    row["hausdorff"] = (ours_distance, theirs_distance)
     row["pixels_sp"] = compare(meshlod, path, row["gp_sp_file"])[0]
     return row
 

@@ -278,9 +278,6 @@ impl Values {
     /// Values `(x, y)` per pair: their mean for floats (`x` itself where `x == y`), `x`'s for
     /// integers.
     pub fn means(&self, pairs: impl Iterator<Item = (usize, usize)>) -> Values {
-        fn mean<const N: usize>(v: &[[f32; N]], (x, y): (usize, usize)) -> [f32; N] {
-            if x == y { v[x] } else { std::array::from_fn(|k| 0.5 * (v[x][k] + v[y][k])) }
-        }
         match self {
             Values::F1(v) => Values::F1(pairs.map(|e| mean(v, e)).collect()),
             Values::F2(v) => Values::F2(pairs.map(|e| mean(v, e)).collect()),
@@ -290,6 +287,11 @@ impl Values {
             Values::U32(v) => Values::U32(pairs.map(|(x, _)| v[x]).collect()),
         }
     }
+}
+
+/// The mean of values `x` and `y` (`x` itself when they are one).
+pub(crate) fn mean<const N: usize>(values: &[[f32; N]], (x, y): (usize, usize)) -> [f32; N] {
+    if x == y { values[x] } else { std::array::from_fn(|k| 0.5 * (values[x][k] + values[y][k])) }
 }
 
 /// One attribute: what it means and its values, one per corner.

@@ -49,32 +49,31 @@ impl Palette {
         Palette { paints, images, notes }
     }
 
-    /// The colour (RGB in [0, 1]) of `mesh`'s face `f` at weights `w`, lit from `light` (towards
-    /// the viewer); `uvs`: its two texture coordinate sets with v down ([`top_down_uvs`]).
-    pub fn shade(&self, mesh: &Mesh, uvs: &TopDownUvs<'_>, f: usize, w: [f32; 3], light: DVec3) -> [f64; 3] {
+    /// The colour (RGB in [0, 1]) of `surface`'s face `f` at weights `w`, lit from `light`
+    /// (towards the viewer).
+    pub fn shade(&self, surface: &Surface<'_>, f: usize, w: [f32; 3], light: DVec3) -> [f64; 3] {
         let corners = [3 * f, 3 * f + 1, 3 * f + 2];
-        let c = &mesh.corners;
         let mix = |values: &[[f32; 4]]| -> [f64; 4] {
             std::array::from_fn(|k| corners.iter().zip(w).map(|(&i, w)| f64::from(values[i][k] * w)).sum())
         };
-        let material = c.materials().map_or(NO_MATERIAL, |m| m[3 * f]);
+        let material = surface.materials.map_or(NO_MATERIAL, |m| m[3 * f]);
         let paint = self.paints.get(material as usize);
         let mut colour = paint.map_or([1.0; 4], |p| p.factor);
         if let Some((image, set)) = paint.and_then(|p| p.texture)
-            && let (Some(Some(image)), Some(uvs)) = (self.images.get(image), &uvs[usize::from(set)])
+            && let (Some(Some(image)), Some(uvs)) = (self.images.get(image), &surface.uvs[usize::from(set)])
         {
             let u: f64 = corners.iter().zip(w).map(|(&i, w)| f64::from(uvs[i][0] * w)).sum();
             let v: f64 = corners.iter().zip(w).map(|(&i, w)| f64::from(uvs[i][1] * w)).sum();
             let texel = sample(image, u, v);
             colour = std::array::from_fn(|k| colour[k] * texel[k]);
         }
-        if let Some(colors) = c.colors() {
+        if let Some(colors) = surface.colors {
             let vertex = mix(colors);
             colour = std::array::from_fn(|k| colour[k] * vertex[k]);
         }
-        let normal = match c.normals() {
+        let normal = match surface.normals {
             Some(n) => corners.iter().zip(w).map(|(&i, w)| DVec3::from(n[i].map(f64::from)) * f64::from(w)).sum(),
-            None => mesh.face_area_vector(f),
+            None => surface.mesh.face_area_vector(f),
         };
         let lambert = normal.normalize_or_zero().dot(light).abs();
         let light = AMBIENT + (1.0 - AMBIENT) * lambert;
@@ -82,12 +81,29 @@ impl Palette {
     }
 }
 
-/// A mesh's two texture coordinate sets with v down from the image's top, as glTF samples them.
-pub(crate) type TopDownUvs<'a> = [Option<std::borrow::Cow<'a, [[f32; 2]]>>; 2];
+/// What the renders of a mesh read per pixel, looked up once for every view: its channels, and its
+/// two texture coordinate sets with v down from the image's top, as glTF samples them (flipped
+/// once when the mesh stores them the other way).
+pub(crate) struct Surface<'a> {
+    pub mesh: &'a Mesh,
+    uvs: [Option<std::borrow::Cow<'a, [[f32; 2]]>>; 2],
+    materials: Option<&'a Vec<u32>>,
+    colors: Option<&'a Vec<[f32; 4]>>,
+    normals: Option<&'a Vec<[f32; 3]>>,
+}
 
-/// [`TopDownUvs`] of `mesh`, flipped once when it stores them the other way.
-pub(crate) fn top_down_uvs(mesh: &Mesh) -> TopDownUvs<'_> {
-    [mesh.corners.uvs_with_origin(true), mesh.corners.uvs1_with_origin(true)]
+impl<'a> Surface<'a> {
+    /// The surface of `mesh`.
+    pub fn of(mesh: &'a Mesh) -> Surface<'a> {
+        let c = &mesh.corners;
+        Surface {
+            mesh,
+            uvs: [c.uvs_with_origin(true), c.uvs1_with_origin(true)],
+            materials: c.materials(),
+            colors: c.colors(),
+            normals: c.normals(),
+        }
+    }
 }
 
 /// A glTF material's base colour factor and texture.

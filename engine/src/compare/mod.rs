@@ -18,7 +18,7 @@ use serde::Serialize;
 use crate::error::MeshError;
 use crate::hausdorff::{HausdorffOptions, hausdorff};
 use crate::mesh::{Mesh, NONE};
-use material::{Palette, top_down_uvs};
+use material::{Palette, Surface};
 use raster::{Frame, View, rasterise};
 
 /// How to compare.
@@ -129,12 +129,13 @@ pub fn compare(a: &Mesh, b: &Mesh, options: &CompareOptions) -> Result<Compariso
     };
     let second = if shared { first.clone() } else { Palette::of(b.corners.library.as_deref()) };
     let palettes = [first, second];
+    let surfaces = [Surface::of(a), Surface::of(b)];
     let views = View::spread(options.views);
     let pairs: Vec<Pair> = views
         .par_iter()
         .map(|view| {
-            let [(pa, ca), (pb, cb)] = [(a, &palettes[0]), (b, &palettes[1])]
-                .map(|(mesh, palette)| draw(mesh, palette, &frame, view, options.size));
+            let [(pa, ca), (pb, cb)] = [(&surfaces[0], &palettes[0]), (&surfaces[1], &palettes[1])]
+                .map(|(surface, palette)| draw(surface, palette, &frame, view, options.size));
             Pair { pictures: [pa, pb], covered: [ca, cb] }
         })
         .collect();
@@ -179,10 +180,15 @@ pub fn compare(a: &Mesh, b: &Mesh, options: &CompareOptions) -> Result<Compariso
     Ok(Comparison { report, pairs, size: options.size })
 }
 
-/// One view of `mesh`: its picture and which pixels it covers.
-fn draw(mesh: &Mesh, palette: &Palette, frame: &Frame, view: &View, size: usize) -> (Vec<[u8; 3]>, Vec<bool>) {
-    let coverage = rasterise(mesh, frame, view, size);
-    let uvs = top_down_uvs(mesh);
+/// One view of a surface: its picture and which pixels it covers.
+fn draw(
+    surface: &Surface<'_>,
+    palette: &Palette,
+    frame: &Frame,
+    view: &View,
+    size: usize,
+) -> (Vec<[u8; 3]>, Vec<bool>) {
+    let coverage = rasterise(surface.mesh, frame, view, size);
     let light: DVec3 = view.direction;
     let picture = coverage
         .face
@@ -192,7 +198,7 @@ fn draw(mesh: &Mesh, palette: &Palette, frame: &Frame, view: &View, size: usize)
             if f == NONE {
                 return [0; 3];
             }
-            palette.shade(mesh, &uvs, f as usize, w, light).map(|c| (c * 255.0).round() as u8)
+            palette.shade(surface, f as usize, w, light).map(|c| (c * 255.0).round() as u8)
         })
         .collect();
     (picture, coverage.face.iter().map(|&f| f != NONE).collect())

@@ -270,6 +270,7 @@ fn interpolate_corners(
     parent: &crate::mesh::CornerAttributes,
     locals: &[(usize, [usize; 3])],
 ) -> crate::mesh::CornerAttributes {
+    use crate::attributes::mean;
     use crate::mesh::{Semantic, Values};
     // The two parent corners a local corner averages (the same one twice for a corner).
     let ends = |f: usize, l: usize| if l < 3 { (3 * f + l, 3 * f + l) } else { (3 * f + l - 3, 3 * f + (l - 2) % 3) };
@@ -309,11 +310,6 @@ fn interpolate_corners(
         out.set(c.semantic.clone(), Some(values));
     }
     out
-}
-
-/// The mean of values `x` and `y` (`x` itself when they are one).
-fn mean<const N: usize>(values: &[[f32; N]], (x, y): (usize, usize)) -> [f32; N] {
-    if x == y { values[x] } else { std::array::from_fn(|k| 0.5 * (values[x][k] + values[y][k])) }
 }
 
 /// The skin of a midpoint between corners `x` and `y`: each joint's weight averaged over the two,
